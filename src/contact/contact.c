@@ -1,0 +1,203 @@
+/* Contact forces at every slot (check point x shape) and the switching
+ * functions of the stick-slip automaton. See docs/contact.md.
+ *
+ * Per slot, with n the unit normal from the shape toward the check point:
+ *   x     = r - dist                       penetration (>0 inside)
+ *   c     = s - (x/2) n                     contact point: middle of the overlap
+ *   v_rel = v_A(c) - v_B(c)                 relative velocity of the two bodies at c
+ *   xdot  = -v_rel . n,  v_t = v_rel - (v_rel . n) n
+ *   f_raw = K x^p + D xdot^q                eq. (3), x^p := |x|^p sign(x), same for xdot^q
+ *   stick: f_t = -(K_t z_t + D_t v_t)       eq. (4), z the anchor (in y), zdot = v_t
+ *   slip:  f_t = -mu_k f_n u/|u|, u = v_t + 2 v_reg s_t   eq. (5)
+ * where s_t is the slip direction anchored at the last event, projected on the
+ * tangent plane. In 1-D slip u/|u| = s_t exactly (Coulomb without smoothing);
+ * in 3-D the 2 v_reg term only keeps the direction defined as |v_t| -> 0.
+ * The force F = f_n n + f_t acts on the check-point body at c, -F on the shape's. */
+#include "capdyn/sim.h"
+#include "../math/cd_math.h"
+#include "geometry.h"
+#include "contact.h"
+
+static double sgnpow(double x, double p)
+{
+    if (p == 1.0) return x;
+    return x >= 0 ? pow(x, p) : -pow(-x, p);
+}
+
+/* world pose of a shape */
+static void shape_pose(const cd_model *m, const cd_data *d, int sh, double R[9], double x[3])
+{
+    int b = m->shape_body[sh];
+    double t[3];
+    cd_m3_mul(R, d->body_R + 9 * b, m->shape_rot + 9 * sh);
+    cd_m3_mulv(t, d->body_R + 9 * b, m->shape_pos + 3 * sh);
+    cd_v3_add(x, d->body_x + 3 * b, t);
+}
+
+/* query in world coordinates; returns 0 ok, 1 separated (libccd, d lower bound), -1 bad */
+static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r,
+                       int use_epa, double *dist, double n[3], double s[3])
+{
+    double R[9], x[3], pl[3], t[3], nl[3], sl[3];
+    int type = m->shape_type[sh], res;
+    shape_pose(m, d, sh, R, x);
+    cd_v3_sub(t, pw, x);
+    cd_m3_tmulv(pl, R, t);
+    if (type == CD_SHAPE_CONVEX || use_epa >= 0) {
+        int epa = use_epa > 0;
+        res = cd_geom_ccd(type, m->shape_size + 3 * sh, m->vert + 3 * m->shape_vert_adr[sh],
+                          m->shape_vert_num[sh], pl, r, epa, epa ? 1e-12 : 1e-12, dist, nl, sl);
+    } else {
+        res = cd_geom_analytic(type, m->shape_size + 3 * sh, pl, dist, nl, sl);
+    }
+    if (res == 0) {
+        cd_m3_mulv(n, R, nl);
+        cd_m3_mulv(t, R, sl);
+        cd_v3_add(s, x, t);
+    }
+    return res;
+}
+
+int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
+                      double *dist, double n[3], double s[3])
+{
+    int type = m->shape_type[shape];
+    if (type == CD_SHAPE_CONVEX)
+        return cd_geom_ccd(type, m->shape_size + 3 * shape, m->vert + 3 * m->shape_vert_adr[shape],
+                           m->shape_vert_num[shape], p, radius, 0, 1e-12, dist, n, s) < 0 ? -1 : 0;
+    return cd_geom_analytic(type, m->shape_size + 3 * shape, p, dist, n, s);
+}
+
+int cd_shape_distance_ccd(const cd_model *m, int shape, const double p[3], double radius,
+                          double *dist, double n[3], double s[3])
+{
+    if (m->shape_type[shape] == CD_SHAPE_PLANE) return -1;
+    return cd_geom_ccd(m->shape_type[shape], m->shape_size + 3 * shape,
+                       m->vert + 3 * m->shape_vert_adr[shape], m->shape_vert_num[shape], p, radius, 1,
+                       1e-12, dist, n, s);
+}
+
+/* tangential projection of a onto the plane normal to n */
+static void tangential(double r[3], const double a[3], const double n[3])
+{
+    double an = cd_v3_dot(a, n);
+    cd_v3_copy(r, a);
+    cd_v3_axpy(r, -an, n);
+}
+
+void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
+{
+    int k;
+    for (k = 0; k < m->nslot; k++) {
+        int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
+        int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
+        const cd_contact_law *L = &m->law[m->slot_law[k]];
+        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3], c[3], va[3], vb[3], vrel[3], vt[3];
+        double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
+        double *z = d->y + m->ny_slot_adr + 3 * k;
+        cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
+        res = query_world(m, d, sh, pw, r, -1, &dist, n, s);
+        d->slot_geomfail[k] = (res < 0);
+        zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
+        if (res != 0) {
+            /* separated per libccd (dist is a lower bound) or a bad answer: no force */
+            x = res > 0 ? r - dist : 0.0;
+            d->slot_x[k] = x;
+            d->slot_xdot[k] = 0;
+            d->slot_fnraw[k] = res > 0 ? x : 0.0; /* negative: keeps the onset function signed */
+            d->slot_fn[k] = 0;
+            cd_v3_zero(d->slot_ft + 3 * k);
+            cd_v3_zero(d->slot_vt + 3 * k);
+            cd_v3_copy(d->slot_point + 3 * k, pw);
+            cd_v3_zero(d->slot_normal + 3 * k);
+            continue;
+        }
+        x = r - dist;
+        cd_v3_copy(c, s);
+        cd_v3_axpy(c, -0.5 * x, n);
+        {
+            double lb[3], t[3];
+            /* velocity of each body's material point at c */
+            cd_v3_sub(t, c, d->body_c + 3 * ba);
+            cd_v3_cross(va, d->body_w + 3 * ba, t);
+            cd_v3_add(va, va, d->body_v + 3 * ba);
+            cd_v3_sub(lb, c, d->body_c + 3 * bb);
+            cd_v3_cross(vb, d->body_w + 3 * bb, lb);
+            cd_v3_add(vb, vb, d->body_v + 3 * bb);
+        }
+        cd_v3_sub(vrel, va, vb);
+        xd = -cd_v3_dot(vrel, n);
+        tangential(vt, vrel, n);
+        /* eq. (3) */
+        fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
+        if (mode != CD_MODE_OPEN) {
+            fn = fraw; /* >= 0 between events: separation is located where it reaches 0 */
+            if (mode == CD_MODE_STICK) {
+                double zt[3];
+                tangential(zt, z, n);
+                /* eq. (4), linear: f_t = -(K_t z_t + D_t v_t) */
+                cd_v3_scale(ft, zt, -L->Kt);
+                cd_v3_axpy(ft, -L->Dt, vt);
+                cd_v3_copy(zdot + 3 * k, vt);
+            } else {
+                double st[3], u[3], nu;
+                tangential(st, d->slot_dir + 3 * k, n);
+                cd_v3_normalize(st);
+                cd_v3_copy(u, vt);
+                cd_v3_axpy(u, 2.0 * m->opt.v_reg, st);
+                nu = cd_v3_norm(u);
+                /* eq. (5): Coulomb, against the slip */
+                if (nu > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
+            }
+        }
+        d->slot_x[k] = x;
+        d->slot_xdot[k] = xd;
+        d->slot_fnraw[k] = fraw;
+        d->slot_fn[k] = fn;
+        cd_v3_copy(d->slot_ft + 3 * k, ft);
+        cd_v3_copy(d->slot_vt + 3 * k, vt);
+        cd_v3_copy(d->slot_point + 3 * k, c);
+        cd_v3_copy(d->slot_normal + 3 * k, n);
+        if (mode == CD_MODE_OPEN) continue;
+        /* wrench on A about its system's reference point, reaction on B */
+        cd_v3_scale(F + 3, n, fn);
+        cd_v3_add(F + 3, F + 3, ft);
+        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[ba]);
+        cd_v3_cross(F, arm, F + 3);
+        for (res = 0; res < 6; res++) d->body_fext[6 * ba + res] += F[res];
+        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[bb]);
+        cd_v3_cross(F, arm, F + 3);
+        for (res = 0; res < 6; res++) d->body_fext[6 * bb + res] -= F[res];
+    }
+}
+
+/* Switching functions of slot k after cd_contact_eval, signed so that a
+ * NEGATIVE value means "the slot must leave its mode":
+ *   open:  -min(x, f_raw)            onset when both penetration and f_raw > 0
+ *   stick: min(x, f_raw)             separation
+ *          mu_s f_n - |f_t|          stick -> slip
+ *   slip:  min(x, f_raw)             separation
+ *          v_t . s_t + v_reg         slip -> stick (velocity reversed)  */
+void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_norm, double *g_fric)
+{
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double x = d->slot_x[k], f = d->slot_fnraw[k], gn = x < f ? x : f;
+    int mode = d->slot_mode[k];
+    /* scale the penetration to a force so that min() compares like with like */
+    gn = (x * L->K) < f ? x * L->K : f;
+    *g_fric = 1.0;
+    if (mode == CD_MODE_OPEN) {
+        *g_norm = -gn;
+        return;
+    }
+    *g_norm = gn;
+    if (mode == CD_MODE_STICK) {
+        *g_fric = L->mu_s * d->slot_fn[k] - cd_v3_norm(d->slot_ft + 3 * k);
+    } else {
+        const double *n = d->slot_normal + 3 * k;
+        double st[3];
+        tangential(st, d->slot_dir + 3 * k, n);
+        cd_v3_normalize(st);
+        *g_fric = cd_v3_dot(d->slot_vt + 3 * k, st) + m->opt.v_reg;
+    }
+}

@@ -1,0 +1,19 @@
+/* Internal: point/sphere distance queries in the shape frame. */
+#ifndef CD_GEOMETRY_H
+#define CD_GEOMETRY_H
+
+/* Exact signed distance of point p (shape frame) to an analytic shape (type:
+ * plane, sphere, box, cylinder, capsule): d (>0 outside), outward unit normal
+ * n, closest surface point s. Returns 0, or -1 if not finite. */
+int cd_geom_analytic(int type, const double size[3], const double p[3], double *d, double n[3], double s[3]);
+
+/* libccd query of a sphere (centre p, radius r) against a shape (any type but
+ * plane); d is the distance of the centre to the surface (r - depth), n the
+ * normal from the shape toward the sphere, s the surface point. use_epa
+ * selects GJK/EPA (allocates) instead of MPR; tol is libccd's tolerance.
+ * Returns 0 when penetrating, 1 when separated (then only d > r is valid: a
+ * lower-bound gap), -1 on a bad libccd answer. */
+int cd_geom_ccd(int type, const double size[3], const double *vert, int nvert, const double p[3],
+                double r, int use_epa, double tol, double *d, double n[3], double s[3]);
+
+#endif
