@@ -1,0 +1,59 @@
+/* capdyn io layer (libcapdyn_io.a): TOML scenarios -> cd_model, and the HDF5
+ * results writer/reader. Needs HDF5 and toml++ on top of the core. Nothing
+ * here prints or exits; errors come back in cd_error. */
+#ifndef CAPDYN_IO_H
+#define CAPDYN_IO_H
+
+#include "capdyn/model.h"
+#include "capdyn/sim.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* ---- scenarios ------------------------------------------------------------ */
+/* A loaded scenario: a finalized model plus the run settings that are not
+ * part of the physics. Strings are owned by the scenario. */
+typedef struct {
+    cd_model *model;       /* finalized, owned */
+    char *path;            /* the file as given */
+    char *title;
+    char *text;            /* the scenario text as read (main file; includes appended with a header line) */
+    char *overrides;       /* the --set overrides, one per line ("" if none) */
+    double duration;       /* [s] */
+    double output_dt;      /* sample interval of the results [s] */
+    double flush_every;    /* wall-clock seconds between HDF5 flushes */
+    int event_capacity;    /* event log ring size for cd_data_create */
+} cd_scenario;
+
+/* Loads, validates and builds a scenario. overrides are "key.path=value"
+ * strings (TOML value syntax: numbers, strings in quotes, arrays), applied
+ * after includes; noverrides may be 0. On error returns NULL and err->msg
+ * reads "FILE:LINE:COL: key 'a.b[2].c': expected ..., got ..." (CD_EINVAL)
+ * or names the file that cannot be read (CD_EIO). */
+cd_scenario *cd_scenario_load(const char *path, const char *const *overrides, int noverrides,
+                              cd_error *err);
+/* Frees a scenario and its model; NULL is a no-op. */
+void cd_scenario_free(cd_scenario *sc);
+
+/* ---- HDF5 results --------------------------------------------------------- */
+typedef struct cd_h5_writer cd_h5_writer;
+
+/* Creates (truncates) path and writes the static description (model layout,
+ * names, attributes: scenario text, capdyn version, creation time). Fails
+ * with CD_EIO before any simulation if the file cannot be created. */
+cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err);
+/* Appends one sample of d (time, system states, slot outputs, diagnostics)
+ * and any events logged since the last call. */
+cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_error *err);
+/* Flushes to disk and commits the sample counter (readers trust only that). */
+cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err);
+/* Writes the final statistics and run status, flushes and closes; frees w.
+ * status/message describe how the run ended. NULL w is a no-op. */
+cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,
+                      const char *message, cd_error *err);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,367 @@
+/* Stick-slip validation (issue 3, tests 3 and 4) and the chattering guard.
+ *
+ * The sliding "block" is a point contact: a check point of radius 0 at the
+ * block's CoM, so friction exerts no moment and the motion is the textbook
+ * particle-on-a-surface one. Loads that must act on the block only (a normal
+ * load) are user wrenches (d->body_fuser); surfaces that move (a slowly
+ * tilting slope, a belt) are free bodies of 1e15 kg, on which the contact
+ * reactions produce accelerations below 1e-13 m/s^2. */
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include <math.h>
+#include <string.h>
+
+static const double G = 9.81;
+
+static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+static int add_system(cd_model *m, const char *name, cd_base_type type, double mass, double inertia,
+                      const double pos[3], const double vel[3], const double angvel[3])
+{
+    cd_error e;
+    cd_system_desc s = cd_system_desc_default();
+    int id;
+    s.name = name;
+    s.type = type;
+    s.mass = mass;
+    memset(s.inertia, 0, sizeof s.inertia);
+    s.inertia[0] = s.inertia[4] = s.inertia[8] = inertia;
+    if (pos) memcpy(s.pos, pos, sizeof s.pos);
+    if (vel) memcpy(s.vel, vel, sizeof s.vel);
+    if (angvel) memcpy(s.angvel, angvel, sizeof s.angvel);
+    id = cd_model_add_system(m, &s, &e);
+    cr_assert(id >= 0, "%s", e.msg);
+    return id;
+}
+
+static int add_point(cd_model *m, int body)
+{
+    cd_error e;
+    double z[3] = {0, 0, 0};
+    int cp = cd_model_add_checkpoint(m, body, z, 0.0, &e);
+    cr_assert(cp >= 0, "%s", e.msg);
+    return cp;
+}
+
+static int add_plane(cd_model *m, int body)
+{
+    cd_error e;
+    int sh = cd_model_add_shape(m, body, CD_SHAPE_PLANE, NULL, NULL, NULL, NULL, 0, &e);
+    cr_assert(sh >= 0, "%s", e.msg);
+    return sh;
+}
+
+static cd_contact_law law_for(double mass, double K, double Kt, double mu_s, double mu_k)
+{
+    cd_contact_law law = cd_contact_law_default();
+    law.K = K;
+    law.D = 2.0 * sqrt(K * mass); /* critical damping (paper's rule, zeta = 1) */
+    law.Kt = Kt;
+    law.Dt = 2.0 * sqrt(Kt * mass);
+    law.mu_s = mu_s;
+    law.mu_k = mu_k;
+    return law;
+}
+
+static void finalize(cd_model *m)
+{
+    cd_error e;
+    cr_assert(cd_model_finalize(m, &e) == CD_OK, "%s", e.msg);
+    m->opt.rtol = 1e-11;
+    m->opt.atol = 1e-13;
+    m->opt.h_max = 1e-3;
+}
+
+static int count_kind(const cd_data *d, int kind)
+{
+    long i;
+    int n = 0;
+    for (i = 0; i < d->ev_count; i++)
+        if (cd_data_event(d, i)->kind == kind) n++;
+    return n;
+}
+
+/* ---- test 3: block on an incline ----------------------------------------- */
+/* The slope is the plane z = 0 of a fixed support; gravity makes angle th with
+ * the slope normal: g = G (sin th, 0, -cos th). The block (1 kg) starts at rest
+ * at the static penetration x0 = m G cos th / K, so no normal mode is excited. */
+typedef struct { cd_model *m; cd_data *d; int block; } scene;
+
+static scene incline(double th, double mu_s, double mu_k)
+{
+    scene r;
+    cd_error e;
+    double mass = 1.0, K = 1e6, pos[3] = {0, 0, 0};
+    int ground, plane, lid;
+    r.m = cd_model_create();
+    ground = add_system(r.m, "slope", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    plane = add_plane(r.m, r.m->sys_body_adr[ground]);
+    pos[2] = -mass * G * cos(th) / K;
+    /* The contact point lies x/2 below the check point (middle of the overlap),
+     * so friction has a lever of ~5 um about the CoM; with a single point
+     * nothing resists the tipping it drives. A large rotational inertia keeps
+     * this idealised point block from tipping (1e6 kg m^2: < 1e-14 rad in 10 s). */
+    r.block = add_system(r.m, "block", CD_BASE_FREE, mass, 1e6, pos, NULL, NULL);
+    add_point(r.m, r.m->sys_body_adr[r.block]);
+    {
+        cd_contact_law law = law_for(mass, K, 1e6, mu_s, mu_k);
+        lid = cd_model_add_law(r.m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(r.m, r.block, -1, plane, lid, &e) >= 0, "%s", e.msg);
+    r.m->gravity[0] = G * sin(th);
+    r.m->gravity[2] = -G * cos(th);
+    finalize(r.m);
+    r.d = cd_data_create(r.m, 0, &e);
+    cr_assert(r.d, "%s", e.msg);
+    return r;
+}
+
+Test(friction, incline_sticks_without_creep)
+{
+    /* tan th = 0.45 < mu_s = 0.5: the block sticks; the stick spring holds a
+     * constant deflection, so after settling there is no creep: drift over
+     * 10 s < 1e-9 m (issue 3, test 3). */
+    double th = atan(0.45), x1, x2, ft;
+    scene r = incline(th, 0.5, 0.4);
+    cd_error e;
+    cr_assert_eq(r.d->slot_mode[0], CD_MODE_STICK, "a contact closed at t = 0 starts sticking");
+    /* start settled: the stick spring preloaded to hold m G sin th (f_t = -K_t z).
+     * From z = 0 the critically damped spring's force overshoots its final
+     * value by e^-2 = 13.5 % (f = F - m zddot), which at tan th = 0.45 would
+     * exceed mu_s = 0.5 and rightly break the block loose. */
+    r.d->y[r.m->ny_slot_adr] = 1.0 * G * sin(th) / r.m->law[0].Kt;
+    cr_assert_eq(cd_sim_advance(r.m, r.d, 1.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    x1 = cd_state_of(r.m, r.d, r.block).pos[0];
+    cr_assert_eq(cd_sim_advance(r.m, r.d, 11.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    x2 = cd_state_of(r.m, r.d, r.block).pos[0];
+    cr_log_info("incline stick: creep %.3e m over 10 s, nrhs %ld", x2 - x1, r.d->stats.nrhs);
+    cr_expect_lt(fabs(x2 - x1), 1e-9, "creep %.3e m over 10 s", x2 - x1);
+    cr_expect_eq(count_kind(r.d, CD_EV_STICK_SLIP), 0, "no slip below the static limit");
+    cr_expect_eq(r.d->slot_mode[0], CD_MODE_STICK);
+    /* the friction force balances the slope component of the weight, 1e-9 rel */
+    ft = norm3(r.d->slot_ft);
+    cr_expect_lt(fabs(ft - G * sin(th)) / (G * sin(th)), 1e-9, "f_t = %.12g N", ft);
+    cd_data_free(r.d);
+    cd_model_free(r.m);
+}
+
+Test(friction, incline_slides_with_coulomb_acceleration)
+{
+    /* tan th = 0.55 > mu_s = 0.5: the block breaks loose and slides with
+     * a = G (sin th - mu_k cos th) (issue 3, test 3), within 1e-6 relative. */
+    double th = atan(0.55), a_exact = G * (sin(th) - 0.4 * cos(th)), v1, v2, a;
+    scene r = incline(th, 0.5, 0.4);
+    cd_error e;
+    cr_assert_eq(cd_sim_advance(r.m, r.d, 0.5, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_eq(count_kind(r.d, CD_EV_STICK_SLIP), 1, "one stick -> slip event");
+    cr_assert_eq(r.d->slot_mode[0], CD_MODE_SLIP);
+    v1 = cd_state_of(r.m, r.d, r.block).vel[0];
+    cr_assert_eq(cd_sim_advance(r.m, r.d, 1.5, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    v2 = cd_state_of(r.m, r.d, r.block).vel[0];
+    a = (v2 - v1) / 1.0;
+    cr_log_info("incline slide: a = %.12g, exact %.12g, rel %.2e, nrhs %ld", a, a_exact, (a - a_exact) / a_exact, r.d->stats.nrhs);
+    cr_expect_lt(fabs(a - a_exact) / a_exact, 1e-6, "a = %.12g, exact %.12g", a, a_exact);
+    cr_expect_eq(count_kind(r.d, CD_EV_SLIP_STICK), 0, "it never sticks again");
+    cd_data_free(r.d);
+    cd_model_free(r.m);
+}
+
+Test(friction, slowly_tilted_slope_breaks_loose_on_time)
+{
+    /* The slope is a 1e15 kg free body rotating about the world y axis at
+     * w = 0.002 rad/s from th0 = 20 deg; the block sits on the axis, loaded by
+     * its weight m G (-z, world) as a user wrench (gravity would also act on
+     * the slope). Quasi-statically f_t = m G sin th(t), f_n = m G cos th(t),
+     * so the stick -> slip event is at tan th = mu_s: t* = (atan(mu_s) - th0) / w.
+     * The block is x0 = 9 um off the axis and is carried by the surface at
+     * v ~ w x0, turning at w: the neglected inertial force m w^2 x0 shifts
+     * f_t / f_n by ~1e-10 at w = 0.01 (measured: 8e-9 s), scaling as w^2
+     * while the event's sensitivity scales as 1/w: at w = 0.002 it is ~2e-9 s.
+     * Issue 3 asks for 1e-8 s. */
+    cd_model *m = cd_model_create();
+    cd_data *d;
+    cd_error e;
+    double th0 = 20.0 * M_PI / 180.0, w = 0.002, mass = 1.0, K = 1e6, pos[3] = {0, 0, 0};
+    double angvel[3] = {0, -w, 0}; /* rotation about -y raises the +x side: slope down toward -x */
+    int slope, plane, block, lid;
+    double tstar, t_ev = -1;
+    long i;
+    cd_system_desc s = cd_system_desc_default();
+    s.name = "slope";
+    s.mass = 1e15;
+    memset(s.inertia, 0, sizeof s.inertia);
+    s.inertia[0] = s.inertia[4] = s.inertia[8] = 1e15;
+    /* orientation: rotated by -th0 about y so that the slope normal is (sin th0, 0, cos th0):
+     * the downhill direction (along which gravity pulls) is -x' */
+    s.quat[0] = cos(-th0 / 2); s.quat[2] = sin(-th0 / 2);
+    memcpy(s.angvel, angvel, sizeof angvel);
+    slope = cd_model_add_system(m, &s, &e);
+    cr_assert(slope >= 0, "%s", e.msg);
+    plane = add_plane(m, m->sys_body_adr[slope]);
+    /* block at the static penetration along the slope normal */
+    {
+        double x0 = mass * G * cos(th0) / K;
+        pos[0] = -x0 * sin(th0); pos[2] = -x0 * cos(th0);
+    }
+    block = add_system(m, "block", CD_BASE_FREE, mass, 1e6, pos, NULL, NULL); /* no tipping, see incline() */
+    add_point(m, m->sys_body_adr[block]);
+    {
+        cd_contact_law law = law_for(mass, K, 1e6, 0.5, 0.4);
+        lid = cd_model_add_law(m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(m, block, -1, plane, lid, &e) >= 0, "%s", e.msg);
+    finalize(m);
+    /* the stick anchor is ~4e-6 m: an absolute tolerance of 1e-13 m would be
+     * a 2.5e-8 relative force error, i.e. ~1e-6 s on the event time */
+    m->opt.atol = 1e-17;
+    m->opt.h_max = 1e-2;
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    /* block velocity must match the slope surface's at t = 0: the block sits on the axis, v = 0 */
+    d->body_fuser[6 * m->sys_body_adr[block] + 5] = -mass * G;
+    tstar = (atan(0.5) - th0) / w;
+    cr_assert_eq(cd_sim_advance(m, d, tstar + 0.5, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    for (i = 0; i < d->ev_count; i++)
+        if (cd_data_event(d, i)->kind == CD_EV_STICK_SLIP) { t_ev = cd_data_event(d, i)->t; break; }
+    cr_assert(t_ev > 0, "no stick -> slip event");
+    cr_log_info("tilted slope: stick->slip at %.12f s, exact %.12f s, diff %.2e s, nrhs %ld", t_ev, tstar, t_ev - tstar, d->stats.nrhs);
+    cr_expect_lt(fabs(t_ev - tstar), 1e-8, "event at %.12f s, expected %.12f s (diff %.2e)", t_ev, tstar, t_ev - tstar);
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+/* ---- test 4: mass-spring on a moving belt --------------------------------- */
+/* A block of mass m tied to a wall by a spring k sits on a belt moving at v_b
+ * (+x) and is pressed on it by a load N. Rigid-stick analysis (Popp & Stelter
+ * 1990; any vibrations text): with x_s = mu_s N / k (break-away) and
+ * x_k = mu_k N / k (slip centre), X0 = x_s - x_k, w = sqrt(k/m):
+ *   slip:  x = x_k + X0 cos(wt) + (v_b/w) sin(wt) until xdot = v_b again,
+ *          T_slip = (pi + 2 atan2(v_b / w, X0)) / w, ending at x_k - X0;
+ *   stick: carried at v_b from x_k - X0 back to x_s: T_stick = 2 X0 / v_b.
+ * The block hangs on two prismatic joints (x, spring; z, free) of a fixed
+ * base, so the spring is a PD actuator with kp = k. The belt is a 1e15 kg
+ * free body moving at v_b. */
+typedef struct { double t_stick, t_slip; long nrhs; } belt_result;
+
+static belt_result run_belt(double kt_ratio)
+{
+    cd_model *m = cd_model_create();
+    cd_data *d;
+    cd_error e;
+    double mass = 1.0, k = 100.0, N = 10.0, vb = 0.1, K = 1e6, pos[3] = {0, 0, 0}, vel[3] = {0, 0, 0};
+    int wall, belt, plane, lid, bx, bz;
+    long i;
+    double last_stick = -1, last_slip = -1;
+    belt_result r = {0, 0, 0};
+    cd_link_desc l = cd_link_desc_default();
+    cd_actuator spring;
+    wall = add_system(m, "wall", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.name = "slider";
+    l.parent = m->sys_body_adr[wall];
+    l.type = CD_JOINT_PRISMATIC;
+    l.axis[0] = 1; l.axis[1] = 0; l.axis[2] = 0;
+    l.mass = 0.5 * mass;
+    bx = cd_model_add_link(m, wall, &l, &e);
+    cr_assert(bx >= 0, "%s", e.msg);
+    l.name = "block";
+    l.parent = bx;
+    l.axis[0] = 0; l.axis[2] = 1;
+    l.q0 = -N / K; /* static normal penetration */
+    bz = cd_model_add_link(m, wall, &l, &e);
+    cr_assert(bz >= 0, "%s", e.msg);
+    memset(&spring, 0, sizeof spring);
+    spring.type = CD_ACT_PD;
+    spring.kp = k;
+    cr_assert(cd_model_set_actuator(m, bx, &spring, &e) == CD_OK, "%s", e.msg);
+    add_point(m, bz);
+    vel[0] = vb;
+    belt = add_system(m, "belt", CD_BASE_FREE, 1e15, 1e15, pos, vel, NULL);
+    plane = add_plane(m, m->sys_body_adr[belt]);
+    {
+        cd_contact_law law = law_for(mass, K, kt_ratio * k, 0.5, 0.3);
+        lid = cd_model_add_law(m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(m, wall, bz, plane, lid, &e) >= 0, "%s", e.msg);
+    finalize(m);
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    d->body_fuser[6 * bz + 5] = -N;
+    /* the block starts at rest on the moving belt: it slips at once, then
+     * falls into the limit cycle; measure the last full cycle after 5 s */
+    cr_assert_eq(cd_sim_advance(m, d, 6.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    for (i = 0; i < d->ev_count; i++) {
+        const cd_event *ev = cd_data_event(d, i);
+        if (ev->t < 3.0) continue;
+        if (ev->kind == CD_EV_STICK_SLIP) {
+            if (last_stick >= 0) r.t_stick = ev->t - last_stick;
+            last_slip = ev->t;
+        } else if (ev->kind == CD_EV_SLIP_STICK) {
+            if (last_slip >= 0) r.t_slip = ev->t - last_slip;
+            last_stick = ev->t;
+        }
+    }
+    r.nrhs = d->stats.nrhs;
+    cd_data_free(d);
+    cd_model_free(m);
+    return r;
+}
+
+Test(friction, belt_stick_slip_limit_cycle, .timeout = 120)
+{
+    double k = 100.0, N = 10.0, vb = 0.1, w = sqrt(k / 1.0);
+    double X0 = (0.5 - 0.3) * N / k;
+    double T_stick = 2.0 * X0 / vb, T_slip = (M_PI + 2.0 * atan2(vb / w, X0)) / w;
+    double ratios[3] = {1e2, 1e3, 1e4}, err_prev = HUGE_VAL;
+    int i;
+    for (i = 0; i < 3; i++) {
+        belt_result r = run_belt(ratios[i]);
+        double es = fabs(r.t_stick - T_stick) / T_stick, el = fabs(r.t_slip - T_slip) / T_slip;
+        double err = es > el ? es : el;
+        cr_log_info("K_t = %g k: stick %.9f (exact %.9f, rel %.2e), slip %.9f (exact %.9f, rel %.2e), nrhs %ld",
+                    ratios[i], r.t_stick, T_stick, es, r.t_slip, T_slip, el, r.nrhs);
+        cr_assert(r.t_stick > 0 && r.t_slip > 0, "no limit cycle found");
+        /* the rigid-stick value is approached as K_t grows */
+        cr_expect_lt(err, err_prev, "error must shrink as K_t grows (%.2e after %.2e)", err, err_prev);
+        err_prev = err;
+        if (ratios[i] >= 1e4) cr_expect_lt(err, 1e-4, "issue 3 test 4: 1e-4 relative at K_t = 1e4 k");
+    }
+}
+
+/* ---- chattering guard ------------------------------------------------------ */
+Test(friction, oblique_impact_cascades_onset_to_slip_in_zero_time)
+{
+    /* A point hits a plane obliquely with mu_s = mu_k: at onset the tangential
+     * damper force D_t |v_t| exceeds mu_s D xdot, so the slot must go open ->
+     * stick -> slip at the same instant (a bounded zero-time cascade), then
+     * slide; the guard allows at most two switches of a slot at one instant. */
+    cd_model *m = cd_model_create();
+    cd_data *d;
+    cd_error e;
+    double pos[3] = {0, 0, 0.01}, vel[3] = {2.0, 0, -1.0};
+    int ground, plane, ball, lid;
+    const cd_event *e0, *e1;
+    ground = add_system(m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    plane = add_plane(m, m->sys_body_adr[ground]);
+    ball = add_system(m, "ball", CD_BASE_FREE, 1.0, 1.0, pos, vel, NULL);
+    add_point(m, m->sys_body_adr[ball]);
+    {
+        cd_contact_law law = law_for(1.0, 1e5, 1e5, 0.3, 0.3);
+        lid = cd_model_add_law(m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(m, ball, -1, plane, lid, &e) >= 0);
+    finalize(m);
+    d = cd_data_create(m, 0, &e);
+    cr_assert_eq(cd_sim_advance(m, d, 0.1, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_geq(d->ev_count, 3);
+    e0 = cd_data_event(d, 0);
+    e1 = cd_data_event(d, 1);
+    cr_expect_eq(e0->kind, CD_EV_ONSET);
+    cr_expect_eq(e1->kind, CD_EV_STICK_SLIP);
+    cr_expect_eq(e0->t, e1->t, "the cascade takes zero time");
+    cr_expect_lt(fabs(e0->t - 0.01), 1e-9, "onset when the point reaches the plane: t = 0.01 s");
+    /* the ball leaves the plane sliding the whole time: separation is the last event */
+    cr_expect_eq(cd_data_event(d, d->ev_count - 1)->kind, CD_EV_SEPARATION);
+    cr_expect_lt(d->ev_count, 10, "no chattering: %ld events", d->ev_count);
+    cd_data_free(d);
+    cd_model_free(m);
+}
