@@ -52,6 +52,11 @@ deps:
 check-deps:
 	@CAPDYN_NO_INSTALL=1 bash scripts/install-deps.sh || { echo "run 'make deps' first (or 'make test' / 'make demo', which install them)" >&2; exit 1; }
 
+# tests (and only tests) may use POSIX/XSI extras: fork, kill, M_PI, ...
+$(BUILD)/tests/%.o: tests/%.c
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -D_DEFAULT_SOURCE -MMD -MP -c $< -o $@
+
 $(BUILD)/%.o: %.c
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -MMD -MP -c $< -o $@
