@@ -365,3 +365,92 @@ Test(friction, oblique_impact_cascades_onset_to_slip_in_zero_time)
     cd_data_free(d);
     cd_model_free(m);
 }
+
+Test(friction, shrinking_cone_slips_once_without_chatter)
+{
+    /* A block pressed on a table by a spring (1e3 N/m) and pulled along x by a
+     * load F_t(t) = 4 - t N; the table recedes at 4 mm/s, so the normal load
+     * falls as N(t) = 10 - 4t N. With mu = 0.5 the cone mu N = 5 - 2t shrinks
+     * faster than the load: break-away at t = 1 s (quasi-static), then a
+     * forward slide (net force t - 1 > 0) until the block leaves the table at
+     * N = 0, t = 2.5 s. At break-away the tangential spring is still
+     * unloading (the contact point moves against the slip direction): the
+     * slip velocity must not be mistaken for a reversal (docs/contact.md),
+     * so: one stick -> slip, no slip -> stick, one separation. */
+    cd_model *m = cd_model_create();
+    cd_data *d;
+    cd_error e;
+    cd_link_desc l = cd_link_desc_default();
+    cd_actuator a;
+    double tt[2] = {0.0, 4.0}, ft[2] = {4.0, 0.0}, K = 1e6, vel[3] = {0, 0, -4e-3};
+    int rig, table, plane, lid, bx, bz, n_ss, n_ls, n_sep;
+    long i;
+    double t_ss = -1, t_sep = -1;
+    rig = add_system(m, "rig", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.parent = m->sys_body_adr[rig];
+    l.type = CD_JOINT_PRISMATIC;
+    l.axis[0] = 1; l.axis[2] = 0;
+    l.mass = 0.5;
+    bx = cd_model_add_link(m, rig, &l, &e);
+    l.parent = bx;
+    l.axis[0] = 0; l.axis[2] = 1;
+    l.q0 = -10.0 / K;
+    l.qd0 = vel[2]; /* moving down with the table: no normal damper force at t = 0 */
+    bz = cd_model_add_link(m, rig, &l, &e);
+    cr_assert(bz >= 0, "%s", e.msg);
+    memset(&a, 0, sizeof a);
+    a.type = CD_ACT_TABLE;
+    a.tbl_t = tt;
+    a.tbl_v = ft;
+    a.ntbl = 2;
+    cr_assert(cd_model_set_actuator(m, bx, &a, &e) == CD_OK, "%s", e.msg);
+    memset(&a, 0, sizeof a);
+    a.type = CD_ACT_PD;
+    a.kp = 1e3;
+    a.qref = -10.0 / K - 0.01; /* 10 N pressing at t = 0 */
+    cr_assert(cd_model_set_actuator(m, bz, &a, &e) == CD_OK, "%s", e.msg);
+    add_point(m, bz);
+    table = add_system(m, "table", CD_BASE_FREE, 1e15, 1e15, NULL, vel, NULL);
+    plane = add_plane(m, m->sys_body_adr[table]);
+    {
+        cd_contact_law law = law_for(1.0, K, 1e6, 0.5, 0.5);
+        lid = cd_model_add_law(m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(m, rig, bz, plane, lid, &e) >= 0, "%s", e.msg);
+    finalize(m);
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    d->y[m->ny_slot_adr] = 4.0 / m->law[0].Kt; /* stick spring preloaded to hold F_t(0) */
+    cr_assert_eq(cd_sim_advance(m, d, 3.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    n_ss = count_kind(d, CD_EV_STICK_SLIP);
+    n_ls = count_kind(d, CD_EV_SLIP_STICK);
+    n_sep = count_kind(d, CD_EV_SEPARATION);
+    for (i = 0; i < d->ev_count; i++) {
+        const cd_event *ev = cd_data_event(d, i);
+        if (ev->kind == CD_EV_STICK_SLIP && t_ss < 0) t_ss = ev->t;
+        if (ev->kind == CD_EV_SEPARATION && t_sep < 0) t_sep = ev->t;
+    }
+    cr_log_info("shrinking cone: %ld events, stick->slip at %.6f s, separation at %.6f s, nrhs %ld",
+                d->ev_count, t_ss, t_sep, d->stats.nrhs);
+    cr_expect_eq(n_ss, 1, "one break-away (%d)", n_ss);
+    cr_expect_eq(n_ls, 0, "no spurious re-stick (%d)", n_ls);
+    cr_expect_eq(n_sep, 1);
+    /* Exact times. The table is at -v t, the block rides on it, the check
+     * point's penetration x obeys the contact law in series with the pressing
+     * spring: K x + D xdot = kp (c0 - v t - x), c0 = -qref = 0.01 + 10/K, whose
+     * ramp solution (the transient dies at (K + kp)/D = 500 /s) is x = a + b t,
+     * b = -kp v / (K + kp), a = (kp c0 - D b) / (K + kp); the normal force is
+     * N(t) = kp (c0 - a - (v + b) t). Break-away where 4 - t = mu N(t),
+     * separation where N = 0. The block's x motion is uniform during stick and
+     * its z motion uniform up to the ramp, so no inertia enters: 1e-7 s. */
+    {
+        double kp = 1e3, v = 4e-3, c0 = 0.01 + 10.0 / K, D = m->law[0].D;
+        double b = -kp * v / (K + kp), a0 = (kp * c0 - D * b) / (K + kp);
+        double t1 = (0.5 * kp * (c0 - a0) - 4.0) / (0.5 * kp * (v + b) - 1.0);
+        double t2 = (c0 - a0) / (v + b);
+        cr_expect_lt(fabs(t_ss - t1), 1e-7, "break-away at %.9f s, expected %.9f s", t_ss, t1);
+        cr_expect_lt(fabs(t_sep - t2), 1e-7, "separation at %.9f s, expected %.9f s", t_sep, t2);
+    }
+    cd_data_free(d);
+    cd_model_free(m);
+}

@@ -89,7 +89,8 @@ typedef struct cd_data {
     double *slot_ft;      /* (nslot x 3) tangential force on the check-point body [N] */
     double *slot_point;   /* (nslot x 3) contact point, world [m] */
     double *slot_normal;  /* (nslot x 3) unit normal, from shape toward check point */
-    double *slot_vt;      /* (nslot x 3) tangential slip velocity [m/s] */
+    double *slot_vt;      /* (nslot x 3) tangential relative velocity at the contact point [m/s] */
+    double *slot_va;      /* (nslot x 3) slip (anchor) velocity while slipping [m/s] */
     double *slot_fnraw;   /* (nslot) the normal law before the no-pull rule [N] */
     int *slot_geomfail;   /* (nslot) 1 if the last geometry query was rejected */
 

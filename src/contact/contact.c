@@ -8,10 +8,18 @@
  *   xdot  = -v_rel . n,  v_t = v_rel - (v_rel . n) n
  *   f_raw = K x^p + D xdot^q                eq. (3), x^p := |x|^p sign(x), same for xdot^q
  *   stick: f_t = -(K_t z_t + D_t v_t)       eq. (4), z the anchor (in y), zdot = v_t
- *   slip:  f_t = -mu_k f_n u/|u|, u = v_t + 2 v_reg s_t   eq. (5)
- * where s_t is the slip direction anchored at the last event, projected on the
- * tangent plane. In 1-D slip u/|u| = s_t exactly (Coulomb without smoothing);
- * in 3-D the 2 v_reg term only keeps the direction defined as |v_t| -> 0.
+ *   slip:  f_t = -mu_k f_n u/|u|, u = v_a + 2 v_reg s_t   eq. (5)
+ * where s_t is the slip direction anchored at the last event (projected on
+ * the tangent plane) and v_a the slip velocity. The contact point's motion
+ * v_t is the slip of the anchor plus the rate of the elastic deflection that
+ * the tangential spring keeps at the cone, z_el = mu_k f_n s / K_t, so
+ *          v_a = v_t - (mu_k / K_t) fdot_n s_t,  fdot_n ~ K p x^(p-1) xdot
+ * (the damper's share of fdot_n is left out: it needs the acceleration).
+ * Without this, a contact whose cone shrinks (f_n falling) under a loaded
+ * spring would see its elastic unloading as a reversed slip and flip between
+ * stick and slip every few nanoseconds. In 1-D slip u/|u| = s_t exactly
+ * (Coulomb without smoothing); in 3-D the 2 v_reg term keeps the direction
+ * defined as v_a -> 0.
  * The force F = f_n n + f_t acts on the check-point body at c, -F on the shape's. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
@@ -143,7 +151,11 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
                 double st[3], u[3], nu;
                 tangential(st, d->slot_dir + 3 * k, n);
                 cd_v3_normalize(st);
-                cd_v3_copy(u, vt);
+                double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
+                double *va = d->slot_va + 3 * k;
+                cd_v3_copy(va, vt);
+                cd_v3_axpy(va, -L->mu_k * fdot / L->Kt, st);
+                cd_v3_copy(u, va);
                 cd_v3_axpy(u, 2.0 * m->opt.v_reg, st);
                 nu = cd_v3_norm(u);
                 /* eq. (5): Coulomb, against the slip */
@@ -177,7 +189,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
  *   stick: min(x, f_raw)             separation
  *          mu_s f_n - |f_t|          stick -> slip
  *   slip:  min(x, f_raw)             separation
- *          v_t . s_t + v_reg         slip -> stick (velocity reversed)  */
+ *          v_a . s_t + v_reg         slip -> stick (slip velocity reversed)  */
 void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_norm, double *g_fric)
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
@@ -198,6 +210,6 @@ void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_nor
         double st[3];
         tangential(st, d->slot_dir + 3 * k, n);
         cd_v3_normalize(st);
-        *g_fric = cd_v3_dot(d->slot_vt + 3 * k, st) + m->opt.v_reg;
+        *g_fric = cd_v3_dot(d->slot_va + 3 * k, st) + m->opt.v_reg;
     }
 }

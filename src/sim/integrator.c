@@ -235,11 +235,12 @@ static int switch_slot(const cd_model *m, cd_data *d, int k, int forgive)
         else if (cd_v3_norm(vt) > 0) { cd_v3_copy(s, vt); cd_v3_normalize(s); }
         else any_tangent(s, n);
     } else if (gf < 0 && from == CD_MODE_SLIP) {
-        double nv = cd_v3_norm(vt);
+        const double *vs = d->slot_va + 3 * k;
+        double nv = cd_v3_norm(vs);
         if (nv > 100.0 * m->opt.v_reg) {
             /* 3-D slip that turned past 90 deg at speed: re-anchor, keep slipping */
             kind = CD_EV_SLIP_TURN;
-            cd_v3_scale(d->slot_dir + 3 * k, vt, 1.0 / nv);
+            cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);
         } else {
             int i;
             to = CD_MODE_STICK;
