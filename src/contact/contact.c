@@ -193,10 +193,10 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_norm, double *g_fric)
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
-    double x = d->slot_x[k], f = d->slot_fnraw[k], gn = x < f ? x : f;
+    double x = d->slot_x[k], f = d->slot_fnraw[k];
     int mode = d->slot_mode[k];
-    /* scale the penetration to a force so that min() compares like with like */
-    gn = (x * L->K) < f ? x * L->K : f;
+    /* min(K x, f_raw): the penetration scaled to a force so that min() compares like with like */
+    double gn = (x * L->K) < f ? x * L->K : f;
     *g_fric = 1.0;
     if (mode == CD_MODE_OPEN) {
         *g_norm = -gn;

@@ -77,16 +77,14 @@ static void cylinder_dist(double R, double L, const double p[3], double *d, doub
         *d = o;
         cd_v3_set(n, er[0] * dr / o, er[1] * dr / o, sz * dz / o);
         cd_v3_set(s, er[0] * R, er[1] * R, sz * L);
-    } else if (dr > 0 || (dr > dz)) { /* side: outside radially, or inside nearer the side */
+    } else if (dr > dz) { /* side: outside radially (dz <= 0), or inside and nearer the side */
         *d = dr;
         cd_v3_copy(n, er);
-        cd_v3_set(s, er[0] * R, er[1] * R, p[2] > L ? L : (p[2] < -L ? -L : p[2]));
-        if (dz > 0) { /* outside axially but inside radially cannot reach here */ }
-    } else { /* cap */
+        cd_v3_set(s, er[0] * R, er[1] * R, p[2]);
+    } else { /* cap: outside axially (dr <= 0), or inside and nearer the cap */
         *d = dz;
         cd_v3_set(n, 0, 0, sz);
         cd_v3_set(s, p[0], p[1], sz * L);
-        if (dr > 0) { s[0] = er[0] * R; s[1] = er[1] * R; }
     }
 }
 
