@@ -2,7 +2,8 @@
  * forward dynamics of free-floating or fixed-base trees.
  *
  * Algorithm choice: the composite-rigid-body algorithm (CRBA) builds H in
- * O(n^2), GSL's Cholesky solves it in O(n^3/6); the bias h comes from one RNE
+ * O(n^2), a Cholesky factorisation solves it in O(n^3/6) (cd_math.h says why
+ * not GSL's: it aborts through GSL's error handler on a singular H); the bias h comes from one RNE
  * pass. For the trees capdyn targets (a gripper: 4-12 joints; chaser + arm +
  * hand: <= ~30) this is faster than the articulated-body algorithm, whose
  * O(n) pays off only beyond that, and H is at hand for diagnostics. All
@@ -12,8 +13,6 @@
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 
-#include <gsl/gsl_linalg.h>
-#include <gsl/gsl_matrix.h>
 #include <string.h>
 
 /* offsets of a system's parts inside y */
@@ -237,19 +236,13 @@ cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
     for (s = 0; s < m->nsys; s++) {
         int n = m->sys_ndof[s], va = m->sys_v_adr[s];
         double *rhs = d->work + 12 * m->nbody, *zero = rhs + n;
-        gsl_matrix_view Hv;
-        gsl_vector_view bv;
         if (n == 0) continue;
         for (i = 0; i < n; i++) zero[i] = 0.0;
         cd_inverse_dynamics(m, d, s, zero, rhs); /* rhs = h - J^T F (bias) */
         for (i = 0; i < n; i++) rhs[i] = d->tau[va + i] - rhs[i];
         cd_mass_matrix(m, d, s, d->H);
-        Hv = gsl_matrix_view_array(d->H, (size_t)n, (size_t)n);
-        for (i = 0; i < n; i++)
-            if (!(d->H[i * n + i] > 0)) return CD_ENUMERIC;
-        if (gsl_linalg_cholesky_decomp1(&Hv.matrix) != 0) return CD_ENUMERIC;
-        bv = gsl_vector_view_array(rhs, (size_t)n);
-        gsl_linalg_cholesky_svx(&Hv.matrix, &bv.vector);
+        if (cd_chol_decomp(d->H, n) != 0) return CD_ENUMERIC;
+        cd_chol_solve(d->H, n, rhs);
         for (i = 0; i < n; i++) d->udot[va + i] = rhs[i];
     }
     return CD_OK;

@@ -92,7 +92,8 @@ static inline void cd_m3_axis_angle(double R[9], const double a[3], double th)
     R[6] = a[2] * a[0] * v - a[1] * s; R[7] = a[2] * a[1] * v + a[0] * s; R[8] = c + a[2] * a[2] * v;
 }
 /* Rotation matrix from roll, pitch, yaw [rad]: R = Rz(yaw) Ry(pitch) Rx(roll)
- * (fixed-axis X-Y-Z, the convention of SpaceDyn's rpy2dc transposed; see docs). */
+ * (fixed axes X, then Y, then Z). SpaceDyn's rpy2dc(r,p,y)' is Rx Ry Rz =
+ * cd_m3_from_rpy(-r,-p,-y)' -- not a plain transpose; see docs/dynamics.md. */
 static inline void cd_m3_from_rpy(double R[9], double roll, double pitch, double yaw)
 {
     double cr = cos(roll), sr = sin(roll), cp = cos(pitch), sp = sin(pitch);
@@ -138,6 +139,46 @@ static inline void cd_quat_deriv_world(double qd[4], const double q[4], const do
     qd[1] = 0.5 * (w[0] * q[0] + w[1] * q[3] - w[2] * q[2]);
     qd[2] = 0.5 * (w[1] * q[0] + w[2] * q[1] - w[0] * q[3]);
     qd[3] = 0.5 * (w[2] * q[0] + w[0] * q[2] - w[1] * q[1]);
+}
+
+/* ---- small dense SPD solve --------------------------------------------------
+ * In-place Cholesky H = L L^T (lower triangle of the row-major n x n H
+ * overwritten by L) and the solve of H x = b in place. Why not GSL's
+ * gsl_linalg_cholesky_decomp1: on a matrix that is not positive definite in
+ * floating point it calls GSL's error handler, whose default aborts the
+ * process, and the library must never abort nor change that process-wide
+ * handler. Returns -1 (nothing solved) when a pivot is not positive, or is
+ * below n eps times its diagonal entry (numerically singular). */
+static inline int cd_chol_decomp(double *H, int n)
+{
+    int i, j, k;
+    for (j = 0; j < n; j++) {
+        double djj = H[j * n + j], piv = djj;
+        for (k = 0; k < j; k++) piv -= H[j * n + k] * H[j * n + k];
+        if (!(piv > (double)n * 2.220446049250313e-16 * fabs(djj))) return -1;
+        piv = sqrt(piv);
+        H[j * n + j] = piv;
+        for (i = j + 1; i < n; i++) {
+            double s = H[i * n + j];
+            for (k = 0; k < j; k++) s -= H[i * n + k] * H[j * n + k];
+            H[i * n + j] = s / piv;
+        }
+    }
+    return 0;
+}
+static inline void cd_chol_solve(const double *L, int n, double *b)
+{
+    int i, k;
+    for (i = 0; i < n; i++) { /* L y = b */
+        double s = b[i];
+        for (k = 0; k < i; k++) s -= L[i * n + k] * b[k];
+        b[i] = s / L[i * n + i];
+    }
+    for (i = n - 1; i >= 0; i--) { /* L^T x = y */
+        double s = b[i];
+        for (k = i + 1; k < n; k++) s -= L[k * n + i] * b[k];
+        b[i] = s / L[i * n + i];
+    }
 }
 
 /* ---- spatial (6-D) algebra, Plucker coordinates about one point ---------- */
