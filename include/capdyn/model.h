@@ -140,7 +140,8 @@ typedef struct {
     int parent;           /* body id of the parent (same system) */
     cd_joint_type type;   /* CD_JOINT_REVOLUTE or CD_JOINT_PRISMATIC */
     double pos[3];        /* joint origin in the parent frame [m] */
-    double rot[9];        /* fixed rotation parent frame -> link frame at q = 0 */
+    double rot[9];        /* orientation of the link frame at q = 0 in the parent frame:
+                             maps link coordinates to parent coordinates (R_link = R_parent rot) */
     double axis[3];       /* joint axis in the link frame (normalised on add) */
     double mass;          /* [kg] (>0) */
     double com[3];        /* CoM in the link frame (origin at the joint) [m] */
@@ -184,7 +185,7 @@ typedef struct cd_model {
     int *body_jnt_type;   /* cd_joint_type */
     int *body_dof;        /* global generalized-velocity index of the joint, -1 for a base */
     double *body_jnt_pos; /* (nbody x 3) joint origin in the parent frame [m] */
-    double *body_jnt_rot; /* (nbody x 9) parent -> link rotation at q = 0 */
+    double *body_jnt_rot; /* (nbody x 9) link frame at q = 0 in the parent frame (link -> parent coordinates) */
     double *body_axis;    /* (nbody x 3) unit joint axis, link frame */
     double *body_mass;    /* (nbody) [kg] */
     double *body_com;     /* (nbody x 3) CoM in the body frame [m]; 0 for bases */
@@ -236,7 +237,9 @@ int cd_model_add_shape(cd_model *m, int body, cd_shape_type type, const double p
                        int nvert, cd_error *err);
 int cd_model_add_law(cd_model *m, const cd_contact_law *law, cd_error *err);
 /* Check points of system `sys` (only those of `body` if body >= 0) against
- * shape `shape` with law `law`. The shape must belong to another system. */
+ * shape `shape` with law `law`. The shape must belong to another system. If
+ * several pairs produce the same (check point, shape) slot, the first pair's
+ * law is kept. */
 int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_error *err);
 /* Sets the actuator of a joint body (table arrays are copied). */
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err);

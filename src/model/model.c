@@ -517,8 +517,8 @@ int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_err
     }
     if (shape < 0 || shape >= m->nshape) { seterr(err, CD_EINVAL, "pair: no shape %d", shape); return -1; }
     if (m->body_sys[m->shape_body[shape]] == sys) {
-        seterr(err, CD_EINVAL, "pair: shape %d belongs to system '%s' itself (self-contact is not supported)",
-               shape, m->sys_name[sys]);
+        seterr(err, CD_EINVAL, "pair: shape %d (%s on body '%s') belongs to system '%s' itself (self-contact is not supported)",
+               shape, cd_shape_type_name(m->shape_type[shape]), m->body_name[m->shape_body[shape]], m->sys_name[sys]);
         return -1;
     }
     if (law < 0 || law >= m->nlaw) { seterr(err, CD_EINVAL, "pair: no contact law %d", law); return -1; }

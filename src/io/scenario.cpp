@@ -1,0 +1,1450 @@
+/* capdyn scenario loader: TOML (toml++ 3.3) -> cd_model, behind the C API of
+ * include/capdyn/io.h. The only C++ translation unit of capdyn.
+ *
+ * Pipeline (docs/scenario-format.md is the user-facing reference):
+ *   1. read + parse each file with toml++, convert it into a small tree of our
+ *      own (Node) that keeps the file:line:column of every key and value;
+ *   2. resolve `include = [...]` recursively (relative to the including file,
+ *      cycles detected), deep-merging: tables merge key by key, arrays of
+ *      tables merge element by element by their `name`, everything else is
+ *      replaced by the including file's value;
+ *   3. apply the --set overrides on the merged tree (their values carry the
+ *      override text as their "location");
+ *   4. walk the tree against the schema (unknown keys are errors with a
+ *      did-you-mean), validate every value and call the C builder of
+ *      model.h. Every builder error is prefixed with the location of the
+ *      table that caused it.
+ *
+ * Why our own tree rather than toml++'s: merging and overriding must keep the
+ * source position of each value (the error of a value that came from an
+ * included file names that file), and toml++ nodes do not carry their
+ * region through copies in a way we can rely on; the tree is tiny.
+ *
+ * Nothing here prints or exits, and no exception crosses the C boundary:
+ * errors are thrown internally as LoadError and turned into cd_error at the
+ * two entry points, which also catch std::bad_alloc and anything else. */
+#include "capdyn/io.h"
+#include "../math/cd_math.h"
+
+#include <toml++/toml.h>
+
+#include <algorithm>
+#include <cctype>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <filesystem>
+#include <memory>
+#include <new>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace {
+
+/* ---- locations and the value tree ------------------------------------------ */
+
+using Str = std::shared_ptr<const std::string>;
+
+/* Where a value came from: a file position, or an override (--set text). */
+struct Loc {
+    Str file;
+    int line = 0, col = 0;
+    Str ovr;
+    std::string str() const
+    {
+        if (ovr) return "--set '" + *ovr + "'";
+        if (!file) return "<scenario>";
+        return *file + ":" + std::to_string(line > 0 ? line : 1) + ":" + std::to_string(col > 0 ? col : 1);
+    }
+};
+
+enum class NK { Table, Array, Int, Float, Bool, String, Other };
+
+struct Node;
+using NodeP = std::shared_ptr<Node>;
+struct Entry {
+    std::string key;
+    Loc kloc;  /* where the key is written */
+    NodeP val;
+};
+struct Node {
+    NK kind = NK::Table;
+    Loc loc;
+    std::vector<Entry> tab;  /* NK::Table, in source order */
+    std::vector<NodeP> arr;  /* NK::Array */
+    long long ival = 0;
+    double fval = 0;
+    bool bval = false;
+    std::string sval;        /* NK::String; NK::Other: the literal */
+    Entry *find(const std::string &k)
+    {
+        for (auto &e : tab)
+            if (e.key == k) return &e;
+        return nullptr;
+    }
+};
+
+struct LoadError {
+    cd_status st;
+    std::string msg;
+};
+
+/* "LOC: key 'PATH': WHAT" (the key part omitted when path is empty). */
+[[noreturn]] void fail_at(const Loc &l, const std::string &path, const std::string &what,
+                          cd_status st = CD_EINVAL)
+{
+    std::string m = l.str() + ": ";
+    if (!path.empty()) m += "key '" + path + "': ";
+    m += what;
+    throw LoadError{st, m};
+}
+
+std::string fmt_num(double v)
+{
+    if (std::isnan(v)) return "nan";
+    if (std::isinf(v)) return v > 0 ? "inf" : "-inf";
+    char b[64];
+    std::snprintf(b, sizeof b, "%.15g", v);
+    return b;
+}
+
+/* A short rendering of a value for "got ..." (arrays inline, cut at 80 chars). */
+std::string render(const Node &n)
+{
+    switch (n.kind) {
+    case NK::Int: return std::to_string(n.ival);
+    case NK::Float: return fmt_num(n.fval);
+    case NK::Bool: return n.bval ? "true" : "false";
+    case NK::String: return "'" + n.sval + "'";
+    case NK::Other: return "a date/time value";
+    case NK::Table: return "a table";
+    case NK::Array: {
+        std::string s = "[";
+        for (size_t i = 0; i < n.arr.size(); i++) {
+            if (i) s += ", ";
+            s += render(*n.arr[i]);
+            if (s.size() > 80) return s.substr(0, 80) + "...]";
+        }
+        return s + "]";
+    }
+    }
+    return "?";
+}
+
+std::string join(const std::string &path, const std::string &key) { return path.empty() ? key : path + "." + key; }
+std::string idx(const std::string &path, size_t i) { return path + "[" + std::to_string(i) + "]"; }
+
+/* ---- did-you-mean ------------------------------------------------------------ */
+
+size_t edit_distance(const std::string &a, const std::string &b)
+{
+    std::vector<size_t> prev(b.size() + 1), cur(b.size() + 1);
+    for (size_t j = 0; j <= b.size(); j++) prev[j] = j;
+    for (size_t i = 1; i <= a.size(); i++) {
+        cur[0] = i;
+        for (size_t j = 1; j <= b.size(); j++) {
+            size_t sub = prev[j - 1] + (a[i - 1] == b[j - 1] ? 0 : 1);
+            cur[j] = std::min({prev[j] + 1, cur[j - 1] + 1, sub});
+        }
+        std::swap(prev, cur);
+    }
+    return prev[b.size()];
+}
+
+std::string lower(std::string s)
+{
+    for (auto &c : s) c = (char)std::tolower((unsigned char)c);
+    return s;
+}
+
+/* The closest candidate if it is close enough (edit distance, case-blind, at
+ * most max(2, len/3)), else "". */
+std::string closest(const std::string &w, const std::vector<std::string> &cands)
+{
+    std::string best;
+    size_t bd = (size_t)-1;
+    for (const auto &c : cands) {
+        size_t d = edit_distance(lower(w), lower(c));
+        if (d < bd) { bd = d; best = c; }
+    }
+    size_t thr = std::max<size_t>(2, w.size() / 3);
+    return bd <= thr ? best : std::string();
+}
+
+std::string list(const std::vector<std::string> &c)
+{
+    std::string s;
+    for (size_t i = 0; i < c.size(); i++) s += (i ? ", " : "") + std::string("'") + c[i] + "'";
+    return s;
+}
+
+/* " (did you mean 'x'?)" or " (expected one of: ...)" */
+std::string hint(const std::string &w, const std::vector<std::string> &cands)
+{
+    std::string c = closest(w, cands);
+    if (!c.empty()) return " (did you mean '" + c + "'?)";
+    if (cands.empty()) return "";
+    return " (expected one of: " + list(cands) + ")";
+}
+
+/* ---- toml++ -> Node ------------------------------------------------------------ */
+
+Loc mkloc(const toml::source_region &r, const Str &file, const Loc &fallback)
+{
+    if (r.begin.line == 0) return fallback;
+    Loc l;
+    l.file = file;
+    l.line = (int)r.begin.line;
+    l.col = (int)r.begin.column;
+    return l;
+}
+
+NodeP convert(const toml::node &n, const Str &file, const Loc &fallback)
+{
+    auto out = std::make_shared<Node>();
+    out->loc = mkloc(n.source(), file, fallback);
+    switch (n.type()) {
+    case toml::node_type::table: {
+        out->kind = NK::Table;
+        for (auto &&kv : *n.as_table()) {
+            Entry e;
+            e.key = std::string(kv.first.str());
+            e.kloc = mkloc(kv.first.source(), file, out->loc);
+            e.val = convert(kv.second, file, e.kloc);
+            out->tab.push_back(std::move(e));
+        }
+        /* toml++ sorts keys; restore the source order so that the first error
+         * reported is the first one in the file */
+        std::stable_sort(out->tab.begin(), out->tab.end(), [](const Entry &a, const Entry &b) {
+            return a.kloc.line != b.kloc.line ? a.kloc.line < b.kloc.line : a.kloc.col < b.kloc.col;
+        });
+        break;
+    }
+    case toml::node_type::array:
+        out->kind = NK::Array;
+        for (auto &&el : *n.as_array()) out->arr.push_back(convert(el, file, out->loc));
+        break;
+    case toml::node_type::string:
+        out->kind = NK::String;
+        out->sval = n.as_string()->get();
+        break;
+    case toml::node_type::integer:
+        out->kind = NK::Int;
+        out->ival = (long long)n.as_integer()->get();
+        break;
+    case toml::node_type::floating_point:
+        out->kind = NK::Float;
+        out->fval = n.as_floating_point()->get();
+        break;
+    case toml::node_type::boolean:
+        out->kind = NK::Bool;
+        out->bval = n.as_boolean()->get();
+        break;
+    default:
+        out->kind = NK::Other;
+        out->sval = "date/time";
+        break;
+    }
+    return out;
+}
+
+void set_loc_all(Node &n, const Loc &l)
+{
+    n.loc = l;
+    for (auto &e : n.tab) {
+        e.kloc = l;
+        set_loc_all(*e.val, l);
+    }
+    for (auto &a : n.arr) set_loc_all(*a, l);
+}
+
+bool is_aot(const Node &n)
+{
+    if (n.kind != NK::Array || n.arr.empty()) return false;
+    for (auto &a : n.arr)
+        if (a->kind != NK::Table) return false;
+    return true;
+}
+
+const std::string *name_of(Node &t)
+{
+    Entry *e = t.kind == NK::Table ? t.find("name") : nullptr;
+    return (e && e->val->kind == NK::String) ? &e->val->sval : nullptr;
+}
+
+/* ---- includes -------------------------------------------------------------------- */
+
+/* Deep merge of `over` into `base` (over wins). Tables merge key by key; arrays
+ * of tables merge element by element on `name` (a named element of `over`
+ * updates the element of `base` with that name, any other is appended);
+ * every other value is replaced. */
+void merge_into(Node &base, Node &over)
+{
+    for (auto &e : over.tab) {
+        Entry *b = base.find(e.key);
+        if (!b) {
+            base.tab.push_back(e);
+        } else if (b->val->kind == NK::Table && e.val->kind == NK::Table) {
+            merge_into(*b->val, *e.val);
+        } else if (is_aot(*b->val) && is_aot(*e.val)) {
+            for (auto &o : e.val->arr) {
+                const std::string *on = name_of(*o);
+                Node *match = nullptr;
+                if (on)
+                    for (auto &x : b->val->arr) {
+                        const std::string *xn = name_of(*x);
+                        if (xn && *xn == *on) { match = x.get(); break; }
+                    }
+                if (match) merge_into(*match, *o);
+                else b->val->arr.push_back(o);
+            }
+        } else {
+            *b = e;
+        }
+    }
+}
+
+struct FileLoader {
+    std::string text;                /* main file, then each include with a header line */
+    std::vector<std::string> stack;  /* canonical paths being loaded (cycle detection) */
+
+    static std::string canon(const std::string &p)
+    {
+        std::error_code ec;
+        auto c = std::filesystem::weakly_canonical(std::filesystem::path(p), ec);
+        return ec ? p : c.string();
+    }
+
+    /* Loads path (and its includes); from/from_key locate the include entry
+     * that asked for it (NULL for the main file). */
+    NodeP load(const std::string &path, const Loc *from, const std::string &from_key)
+    {
+        std::string cpath = canon(path);
+        for (size_t i = 0; i < stack.size(); i++)
+            if (stack[i] == cpath) {
+                std::string cyc;
+                for (size_t j = i; j < stack.size(); j++) cyc += stack[j] + " -> ";
+                fail_at(*from, from_key, "include cycle: " + cyc + cpath);
+            }
+        /* read the whole file */
+        std::string content;
+        {
+            FILE *f = std::fopen(path.c_str(), "rb");
+            if (!f) {
+                int e = errno;
+                if (!from)
+                    throw LoadError{CD_EIO, "cannot read scenario file '" + path + "': " + std::strerror(e)};
+                fail_at(*from, from_key, "cannot read included file '" + path + "': " + std::strerror(e),
+                        CD_EIO);
+            }
+            char buf[65536];
+            size_t n;
+            while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) content.append(buf, n);
+            bool bad = std::ferror(f) != 0;
+            std::fclose(f);
+            if (bad) {
+                if (!from) throw LoadError{CD_EIO, "cannot read scenario file '" + path + "': read error"};
+                fail_at(*from, from_key, "cannot read included file '" + path + "': read error", CD_EIO);
+            }
+        }
+        if (from) text += "\n# ---- included file: " + path + " ----\n";
+        text += content;
+
+        Str file = std::make_shared<const std::string>(path);
+        NodeP root;
+        try {
+            toml::table t = toml::parse(std::string_view(content), std::string_view(path));
+            Loc top;
+            top.file = file;
+            top.line = top.col = 1;
+            root = convert(t, file, top);
+            root->loc = top;
+        } catch (const toml::parse_error &pe) {
+            Loc l;
+            l.file = file;
+            l.line = (int)pe.source().begin.line;
+            l.col = (int)pe.source().begin.column;
+            fail_at(l, "", "TOML syntax error: " + std::string(pe.description()));
+        }
+
+        Entry *inc = root->find("include");
+        if (!inc) return root;
+        std::vector<std::pair<std::string, Loc>> incs;
+        Node &iv = *inc->val;
+        if (iv.kind == NK::String) {
+            incs.push_back({iv.sval, iv.loc});
+        } else if (iv.kind == NK::Array) {
+            for (size_t i = 0; i < iv.arr.size(); i++) {
+                if (iv.arr[i]->kind != NK::String)
+                    fail_at(iv.arr[i]->loc, idx("include", i),
+                            "expected a file name (string), got " + render(*iv.arr[i]));
+                incs.push_back({iv.arr[i]->sval, iv.arr[i]->loc});
+            }
+        } else {
+            fail_at(iv.loc, "include", "expected an array of file names, got " + render(iv));
+        }
+        auto merged = std::make_shared<Node>();
+        merged->kind = NK::Table;
+        merged->loc = root->loc;
+        std::filesystem::path dir = std::filesystem::path(path).parent_path();
+        stack.push_back(cpath);
+        for (size_t i = 0; i < incs.size(); i++) {
+            std::filesystem::path p(incs[i].first);
+            std::string resolved = p.is_absolute() ? p.string() : (dir / p).string();
+            std::string key = iv.kind == NK::String ? std::string("include") : idx("include", i);
+            NodeP child = load(resolved, &incs[i].second, key);
+            merge_into(*merged, *child);
+        }
+        stack.pop_back();
+        root->tab.erase(root->tab.begin() + (inc - root->tab.data()));
+        merge_into(*merged, *root);
+        return merged;
+    }
+};
+
+/* ---- --set overrides ---------------------------------------------------------- */
+
+bool is_ident_char(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '-'; }
+
+std::string trim(const std::string &s)
+{
+    size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
+    return a == std::string::npos ? std::string() : s.substr(a, b - a + 1);
+}
+
+/* Parses the value of an override: TOML value syntax; a bare word (letters,
+ * digits, _ - . /) that is not valid TOML is taken as a string. */
+NodeP parse_override_value(const std::string &value, const Loc &L)
+{
+    NodeP out;
+    try {
+        toml::table t = toml::parse(std::string_view("v = " + value), std::string_view("--set"));
+        if (t.size() == 1 && t.contains("v")) {
+            out = convert(*t.get("v"), nullptr, L);
+        }
+    } catch (const toml::parse_error &) {
+        out = nullptr;
+    }
+    if (!out) {
+        bool bare = !value.empty() && (std::isalpha((unsigned char)value[0]) || value[0] == '_');
+        for (char c : value)
+            if (!(is_ident_char(c) || c == '.' || c == '/')) bare = false;
+        if (!bare)
+            fail_at(L, "",
+                    "cannot parse the value '" + value +
+                        "' (expected a TOML value: a number, \"string\", [array] or {table})");
+        out = std::make_shared<Node>();
+        out->kind = NK::String;
+        out->sval = value;
+    }
+    set_loc_all(*out, L);
+    return out;
+}
+
+void apply_override(NodeP &root, const std::string &ov)
+{
+    Loc L;
+    L.ovr = std::make_shared<const std::string>(ov);
+    size_t eq = ov.find('=');
+    if (eq == std::string::npos) fail_at(L, "", "expected KEY.PATH=VALUE");
+    std::string path = trim(ov.substr(0, eq)), value = trim(ov.substr(eq + 1));
+    if (path.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the key path is empty)");
+    if (value.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the value is empty)");
+
+    /* split into segments: ident ('[' int ']')* separated by '.' */
+    struct Seg {
+        std::string id;
+        std::vector<size_t> ix;
+    };
+    std::vector<Seg> segs;
+    size_t i = 0;
+    while (i < path.size()) {
+        Seg s;
+        while (i < path.size() && is_ident_char(path[i])) s.id += path[i++];
+        if (s.id.empty()) fail_at(L, "", "bad key path '" + path + "' (expected names separated by '.', indices as [N])");
+        while (i < path.size() && path[i] == '[') {
+            size_t j = path.find(']', i);
+            std::string num = j == std::string::npos ? "" : path.substr(i + 1, j - i - 1);
+            if (num.empty() || num.find_first_not_of("0123456789") != std::string::npos)
+                fail_at(L, "", "bad index in key path '" + path + "' (expected [N], N >= 0)");
+            s.ix.push_back((size_t)std::stoul(num));
+            i = j + 1;
+        }
+        segs.push_back(s);
+        if (i < path.size()) {
+            if (path[i] != '.') fail_at(L, "", "bad key path '" + path + "' (unexpected '" + path[i] + "')");
+            i++;
+            if (i == path.size()) fail_at(L, "", "bad key path '" + path + "' (ends with '.')");
+        }
+    }
+    if (segs[0].id == "include") fail_at(L, "", "'include' cannot be changed by --set");
+
+    NodeP value_node = parse_override_value(value, L);
+    NodeP *slot = &root;
+    std::string shown;  /* the canonical path walked so far, for messages */
+    for (size_t k = 0; k < segs.size(); k++) {
+        const Seg &s = segs[k];
+        bool last = k + 1 == segs.size();
+        Node &cur = **slot;
+        if (cur.kind == NK::Table) {
+            Entry *e = cur.find(s.id);
+            if (!e) {
+                if (!s.ix.empty())
+                    fail_at(L, join(shown, s.id), "cannot index a key that does not exist");
+                /* a missing key is created (the schema check then names it if it is not a known key) */
+                Entry ne;
+                ne.key = s.id;
+                ne.kloc = L;
+                if (last) {
+                    ne.val = value_node;
+                } else {
+                    ne.val = std::make_shared<Node>();
+                    ne.val->kind = NK::Table;
+                    ne.val->loc = L;
+                }
+                cur.tab.push_back(ne);
+                slot = &cur.tab.back().val;
+                shown = join(shown, s.id);
+                if (last) return;
+                continue;
+            }
+            slot = &e->val;
+            shown = join(shown, s.id);
+        } else if (cur.kind == NK::Array) {
+            /* select an element of an array of tables by its name */
+            std::vector<std::string> names;
+            NodeP *hit = nullptr;
+            size_t hit_i = 0;
+            for (size_t j = 0; j < cur.arr.size(); j++) {
+                const std::string *n = name_of(*cur.arr[j]);
+                if (!n) continue;
+                names.push_back(*n);
+                if (*n == s.id && !hit) { hit = &cur.arr[j]; hit_i = j; }
+            }
+            if (!hit) {
+                if (names.empty())
+                    fail_at(L, shown, "no element named '" + s.id + "' (the elements have no names; use an index [N])");
+                fail_at(L, shown, "no element named '" + s.id + "'" + hint(s.id, names));
+            }
+            slot = hit;
+            shown = idx(shown, hit_i);
+        } else {
+            fail_at(L, shown, "expected a table to select '" + s.id + "' in, got " + render(cur));
+        }
+        for (size_t x : s.ix) {
+            Node &n = **slot;
+            if (n.kind != NK::Array)
+                fail_at(L, shown, "cannot index [" + std::to_string(x) + "]: the value is " + render(n) + ", not an array");
+            if (x >= n.arr.size())
+                fail_at(L, shown,
+                        "index [" + std::to_string(x) + "] out of range (the array has " + std::to_string(n.arr.size()) +
+                            " elements)");
+            slot = &n.arr[x];
+            shown = idx(shown, x);
+        }
+        if (last) {
+            *slot = value_node;
+            return;
+        }
+    }
+}
+
+/* ---- typed readers ------------------------------------------------------------- */
+
+enum class Range { Any, Pos, NonNeg, Ge1 };
+
+const char *range_text(Range r)
+{
+    switch (r) {
+    case Range::Any: return "a finite number";
+    case Range::Pos: return "a positive number";
+    case Range::NonNeg: return "a number >= 0";
+    case Range::Ge1: return "a number >= 1";
+    }
+    return "a number";
+}
+
+double num_of(const Node &n, const std::string &path, Range r)
+{
+    double v;
+    if (n.kind == NK::Int) v = (double)n.ival;
+    else if (n.kind == NK::Float) v = n.fval;
+    else fail_at(n.loc, path, std::string("expected ") + range_text(r) + ", got " + render(n));
+    bool ok = std::isfinite(v);
+    if (ok) switch (r) {
+        case Range::Any: break;
+        case Range::Pos: ok = v > 0; break;
+        case Range::NonNeg: ok = v >= 0; break;
+        case Range::Ge1: ok = v >= 1; break;
+        }
+    if (!ok) fail_at(n.loc, path, std::string("expected ") + range_text(r) + ", got " + render(n));
+    return v;
+}
+
+/* An array of exactly k numbers (each in range r). */
+void vec_of(const Node &n, const std::string &path, int k, double *out, Range r = Range::Any,
+            const char *what = nullptr)
+{
+    std::string exp = what ? std::string(what) : "an array of " + std::to_string(k) + " numbers";
+    if (n.kind != NK::Array || (int)n.arr.size() != k) fail_at(n.loc, path, "expected " + exp + ", got " + render(n));
+    for (int i = 0; i < k; i++) out[i] = num_of(*n.arr[(size_t)i], idx(path, (size_t)i), r);
+}
+
+std::string str_of(const Node &n, const std::string &path)
+{
+    if (n.kind != NK::String) fail_at(n.loc, path, "expected a string, got " + render(n));
+    return n.sval;
+}
+
+std::string choice_of(const Node &n, const std::string &path, const std::vector<std::string> &choices)
+{
+    std::string s = str_of(n, path);
+    for (auto &c : choices)
+        if (c == s) return s;
+    std::string m = "expected one of " + list(choices) + ", got '" + s + "'";
+    std::string c = closest(s, choices);
+    if (!c.empty()) m += " (did you mean '" + c + "'?)";
+    fail_at(n.loc, path, m);
+}
+
+/* Names: letters, digits, '_' and '-' (they are used in "system/link" references and --set paths). */
+std::string name_of_node(const Node &n, const std::string &path)
+{
+    std::string s = str_of(n, path);
+    bool ok = !s.empty();
+    for (char c : s)
+        if (!is_ident_char(c)) ok = false;
+    if (!ok) fail_at(n.loc, path, "expected a name made of letters, digits, '_' and '-', got '" + s + "'");
+    return s;
+}
+
+long long int_of(const Node &n, const std::string &path, long long minv)
+{
+    std::string exp = "expected an integer >= " + std::to_string(minv);
+    long long v = 0;
+    if (n.kind == NK::Int) v = n.ival;
+    else if (n.kind == NK::Float && std::isfinite(n.fval) && n.fval == std::floor(n.fval) && std::fabs(n.fval) < 9e18)
+        v = (long long)n.fval;
+    else fail_at(n.loc, path, exp + ", got " + render(n));
+    if (v < minv) fail_at(n.loc, path, exp + ", got " + render(n));
+    return v;
+}
+
+/* A table being read: checks unknown keys on construction. */
+struct Tab {
+    Node *n;
+    std::string path;
+    Tab(Node *node, std::string p, const std::vector<std::string> &allowed) : n(node), path(std::move(p))
+    {
+        for (auto &e : n->tab)
+            if (std::find(allowed.begin(), allowed.end(), e.key) == allowed.end())
+                fail_at(e.kloc, join(path, e.key), "unknown key" + hint(e.key, allowed));
+    }
+    Entry *get(const char *k) const { return n->find(k); }
+    Node &need(const char *k, const std::string &expected) const
+    {
+        Entry *e = n->find(k);
+        if (!e) fail_at(n->loc, join(path, k), "missing required key (expected " + expected + ")");
+        return *e->val;
+    }
+    std::string kp(const char *k) const { return join(path, k); }
+    double num(const char *k, double def, Range r) const
+    {
+        Entry *e = get(k);
+        return e ? num_of(*e->val, kp(k), r) : def;
+    }
+    double need_num(const char *k, Range r) const { return num_of(need(k, range_text(r)), kp(k), r); }
+    void vec(const char *k, int dim, double *out, Range r = Range::Any) const
+    {
+        Entry *e = get(k);
+        if (e) vec_of(*e->val, kp(k), dim, out, r);
+    }
+};
+
+/* A child table (value must be a table). */
+Node *table_of(Node &n, const std::string &path)
+{
+    if (n.kind != NK::Table) fail_at(n.loc, path, "expected a table, got " + render(n));
+    return &n;
+}
+
+/* A list of tables: an array of tables, or a single table taken as one. */
+std::vector<Node *> tables_of(Node &n, const std::string &path, const char *header)
+{
+    std::vector<Node *> out;
+    if (n.kind == NK::Table) {
+        out.push_back(&n);
+        return out;
+    }
+    if (n.kind == NK::Array) {
+        for (auto &a : n.arr) {
+            if (a->kind != NK::Table)
+                fail_at(a->loc, path, std::string("expected an array of tables (") + header + "), got " + render(n));
+            out.push_back(a.get());
+        }
+        return out;
+    }
+    fail_at(n.loc, path, std::string("expected an array of tables (") + header + "), got " + render(n));
+}
+
+/* ---- geometry helpers ----------------------------------------------------------- */
+
+/* Eigenvalues of a symmetric 3x3 (trigonometric method, as in model.c). */
+void sym_eig3(const double I[9], double ev[3])
+{
+    double p1 = I[1] * I[1] + I[2] * I[2] + I[5] * I[5];
+    double q = (I[0] + I[4] + I[8]) / 3.0;
+    if (p1 == 0) {
+        ev[0] = I[0]; ev[1] = I[4]; ev[2] = I[8];
+        return;
+    }
+    double p2 = (I[0] - q) * (I[0] - q) + (I[4] - q) * (I[4] - q) + (I[8] - q) * (I[8] - q) + 2 * p1;
+    double p = std::sqrt(p2 / 6.0), B[9];
+    for (int i = 0; i < 9; i++) B[i] = (I[i] - (i % 4 == 0 ? q : 0.0)) / p;
+    double r = 0.5 * (B[0] * (B[4] * B[8] - B[5] * B[7]) - B[1] * (B[3] * B[8] - B[5] * B[6]) +
+                      B[2] * (B[3] * B[7] - B[4] * B[6]));
+    double phi = r <= -1 ? CD_PI / 3 : (r >= 1 ? 0 : std::acos(r) / 3);
+    ev[0] = q + 2 * p * std::cos(phi);
+    ev[2] = q + 2 * p * std::cos(phi + 2 * CD_PI / 3);
+    ev[1] = 3 * q - ev[0] - ev[2];
+}
+
+/* inertia: 3 numbers (principal, diagonal), 6 numbers (xx yy zz xy xz yz: the
+ * tensor's entries, I_xy = -sum m x y) or a 3x3 array; then physically checked. */
+void inertia_of(const Node &n, const std::string &path, double I[9])
+{
+    const char *exp = "expected 3 numbers (principal moments), 6 numbers (xx, yy, zz, xy, xz, yz) or a 3x3 array";
+    if (n.kind != NK::Array) fail_at(n.loc, path, std::string(exp) + ", got " + render(n));
+    std::memset(I, 0, 9 * sizeof(double));
+    if (n.arr.size() == 3 && n.arr[0]->kind == NK::Array) {
+        for (size_t r = 0; r < 3; r++) vec_of(*n.arr[r], idx(path, r), 3, I + 3 * r, Range::Any, "a row of 3 numbers");
+        double tol = 1e-9 * (std::fabs(I[0]) + std::fabs(I[4]) + std::fabs(I[8]));
+        if (std::fabs(I[1] - I[3]) > tol || std::fabs(I[2] - I[6]) > tol || std::fabs(I[5] - I[7]) > tol)
+            fail_at(n.loc, path, "expected a symmetric inertia matrix, got " + render(n));
+    } else if (n.arr.size() == 3) {
+        double d[3];
+        vec_of(n, path, 3, d);
+        I[0] = d[0]; I[4] = d[1]; I[8] = d[2];
+    } else if (n.arr.size() == 6) {
+        double d[6];
+        vec_of(n, path, 6, d);
+        I[0] = d[0]; I[4] = d[1]; I[8] = d[2];
+        I[1] = I[3] = d[3];
+        I[2] = I[6] = d[4];
+        I[5] = I[7] = d[5];
+    } else {
+        fail_at(n.loc, path, std::string(exp) + ", got " + render(n));
+    }
+    double ev[3];
+    sym_eig3(I, ev);
+    std::string evs = "(" + fmt_num(ev[0]) + ", " + fmt_num(ev[1]) + ", " + fmt_num(ev[2]) + ")";
+    if (!(ev[0] > 0 && ev[1] > 0 && ev[2] > 0))
+        fail_at(n.loc, path, "expected a positive definite inertia, got principal moments " + evs);
+    double tol = 1e-9 * (ev[0] + ev[1] + ev[2]);
+    if (ev[0] + ev[1] < ev[2] - tol || ev[1] + ev[2] < ev[0] - tol || ev[0] + ev[2] < ev[1] - tol)
+        fail_at(n.loc, path,
+                "expected principal moments obeying the triangle inequality (each <= the sum of the other two), got " +
+                    evs);
+}
+
+const double DEG = CD_PI / 180.0;
+
+/* Orientation from rpy_deg or quaternion (exclusive); identity if neither. */
+void rotation_of(const Tab &t, double R[9], const char *extra_exclusive = nullptr)
+{
+    Entry *rpy = t.get("rpy_deg"), *qu = t.get("quaternion");
+    Entry *ex = extra_exclusive ? t.get(extra_exclusive) : nullptr;
+    if (rpy && qu) fail_at(qu->kloc, t.kp("quaternion"), "give either rpy_deg or quaternion, not both");
+    cd_m3_identity(R);
+    if (rpy) {
+        if (ex) fail_at(ex->kloc, t.kp(extra_exclusive), std::string("give either rpy_deg or ") + extra_exclusive + ", not both");
+        double a[3];
+        vec_of(*rpy->val, t.kp("rpy_deg"), 3, a, Range::Any, "an array of 3 angles [roll, pitch, yaw] in degrees");
+        cd_m3_from_rpy(R, a[0] * DEG, a[1] * DEG, a[2] * DEG);
+    } else if (qu) {
+        if (ex) fail_at(ex->kloc, t.kp(extra_exclusive), std::string("give either quaternion or ") + extra_exclusive + ", not both");
+        double q[4];
+        vec_of(*qu->val, t.kp("quaternion"), 4, q, Range::Any, "an array of 4 numbers [w, x, y, z]");
+        double nq = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
+        if (!(nq > 1e-12)) fail_at(qu->val->loc, t.kp("quaternion"), "expected a non-zero quaternion [w, x, y, z], got " + render(*qu->val));
+        cd_quat_to_m3(R, q);
+    }
+}
+
+/* Rotation taking +z onto the unit vector n (the smallest rotation). */
+void rot_z_to(const double nin[3], double R[9])
+{
+    double n[3] = {nin[0], nin[1], nin[2]}, z[3] = {0, 0, 1}, a[3];
+    cd_v3_normalize(n);
+    double c = cd_v3_dot(z, n);
+    cd_v3_cross(a, z, n);
+    double s = cd_v3_norm(a);
+    if (s < 1e-12) {
+        cd_m3_identity(R);
+        if (c < 0) { R[4] = -1; R[8] = -1; } /* rotation by pi about x */
+        return;
+    }
+    cd_v3_scale(a, a, 1.0 / s);
+    cd_m3_axis_angle(R, a, std::atan2(s, c));
+}
+
+/* ---- the model builder ------------------------------------------------------------- */
+
+struct ModelDel {
+    void operator()(cd_model *m) const { cd_model_free(m); }
+};
+
+struct BodyInfo {
+    std::string name;
+    int id;
+    int ncp = 0;
+};
+struct SysInfo {
+    std::string name;
+    int id;
+    Loc loc;
+    std::string path;
+    std::vector<BodyInfo> bodies;  /* base first (named "base" here) */
+    std::vector<std::pair<std::string, int>> shapes;
+};
+
+struct LawState {
+    cd_contact_law law;
+    bool kt_set = false, dt_set = false, mu_set = false;
+};
+
+const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "mu_max", "mu", "rule"};
+
+struct Builder {
+    std::unique_ptr<cd_model, ModelDel> m;
+    std::vector<SysInfo> sys;
+    cd_error err{};
+    Loc file_loc;
+
+    /* builder call failed: prefix its message with the table's location */
+    [[noreturn]] void builder_fail(const Loc &l, const std::string &path)
+    {
+        fail_at(l, path, err.msg, err.status == CD_ENOMEM ? CD_ENOMEM : CD_EINVAL);
+    }
+
+    std::vector<std::string> sys_names() const
+    {
+        std::vector<std::string> v;
+        for (auto &s : sys) v.push_back(s.name);
+        return v;
+    }
+    SysInfo *find_sys(const std::string &n)
+    {
+        for (auto &s : sys)
+            if (s.name == n) return &s;
+        return nullptr;
+    }
+
+    /* checkpoints = [[x, y, z, r], ...] on body b */
+    void checkpoints(const Tab &t, BodyInfo &b)
+    {
+        Entry *e = t.get("checkpoints");
+        if (!e) return;
+        Node &a = *e->val;
+        std::string p = t.kp("checkpoints");
+        if (a.kind != NK::Array) fail_at(a.loc, p, "expected an array of [x, y, z, radius] rows, got " + render(a));
+        for (size_t i = 0; i < a.arr.size(); i++) {
+            double v[4];
+            vec_of(*a.arr[i], idx(p, i), 4, v, Range::Any, "[x, y, z, radius] (metres)");
+            if (!(v[3] >= 0)) fail_at(a.arr[i]->arr[3]->loc, idx(idx(p, i), 3), "expected a radius >= 0, got " + fmt_num(v[3]));
+            if (cd_model_add_checkpoint(m.get(), b.id, v, v[3], &err) < 0) builder_fail(a.arr[i]->loc, idx(p, i));
+            b.ncp++;
+        }
+    }
+
+    void shape(Node &node, const std::string &path, SysInfo &s, int body, const char *default_name)
+    {
+        Tab t(&node, path,
+              {"name", "type", "position", "rpy_deg", "quaternion", "normal", "radius", "length", "size", "vertices"});
+        std::string name;
+        if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
+        else if (default_name) name = default_name;
+        else t.need("name", "a name (shapes are referenced as \"system/name\")");
+        for (auto &sh : s.shapes)
+            if (sh.first == name)
+                fail_at(t.get("name") ? t.get("name")->val->loc : node.loc, t.kp("name"),
+                        "expected a shape name unique in system '" + s.name + "', got '" + name + "' twice");
+        std::vector<std::string> types = {"plane", "sphere", "box", "cylinder", "capsule", "convex"};
+        std::string ty = choice_of(t.need("type", "one of " + list(types)), t.kp("type"), types);
+        int type = cd_shape_type_from_name(ty.c_str());
+        /* which size keys apply to which type */
+        std::vector<std::string> takes;
+        if (ty == "plane") takes = {"normal"};
+        else if (ty == "sphere") takes = {"radius"};
+        else if (ty == "box") takes = {"size"};
+        else if (ty == "cylinder" || ty == "capsule") takes = {"radius", "length"};
+        else takes = {"vertices"};
+        for (const char *k : {"normal", "radius", "length", "size", "vertices"})
+            if (Entry *e = t.get(k))
+                if (std::find(takes.begin(), takes.end(), k) == takes.end())
+                    fail_at(e->kloc, t.kp(k), "does not apply to a " + ty + " shape (it takes: " + list(takes) + ")");
+        double pos[3] = {0, 0, 0}, R[9], sz[3] = {0, 0, 0};
+        t.vec("position", 3, pos);
+        rotation_of(t, R, "normal");
+        std::vector<double> verts;
+        if (ty == "plane") {
+            if (Entry *e = t.get("normal")) {
+                double nrm[3];
+                vec_of(*e->val, t.kp("normal"), 3, nrm);
+                if (!(cd_v3_norm(nrm) > 1e-12)) fail_at(e->val->loc, t.kp("normal"), "expected a non-zero vector, got " + render(*e->val));
+                rot_z_to(nrm, R);
+            }
+        } else if (ty == "sphere") {
+            sz[0] = t.need_num("radius", Range::Pos);
+        } else if (ty == "box") {
+            vec_of(t.need("size", "an array of 3 positive edge lengths [m]"), t.kp("size"), 3, sz, Range::Pos);
+            for (double &v : sz) v *= 0.5;
+        } else if (ty == "cylinder" || ty == "capsule") {
+            sz[0] = t.need_num("radius", Range::Pos);
+            sz[1] = 0.5 * t.need_num("length", Range::Pos);
+        } else {
+            const Node &vn = t.need("vertices", "an array of at least 4 [x, y, z] points");
+            if (vn.kind != NK::Array || vn.arr.size() < 4)
+                fail_at(vn.loc, t.kp("vertices"), "expected an array of at least 4 [x, y, z] points, got " + render(vn));
+            for (size_t i = 0; i < vn.arr.size(); i++) {
+                double v[3];
+                vec_of(*vn.arr[i], idx(t.kp("vertices"), i), 3, v);
+                verts.insert(verts.end(), v, v + 3);
+            }
+        }
+        int id = cd_model_add_shape(m.get(), body, (cd_shape_type)type, pos, R, sz, verts.empty() ? nullptr : verts.data(),
+                                    (int)(verts.size() / 3), &err);
+        if (id < 0) builder_fail(node.loc, path);
+        s.shapes.push_back({name, id});
+    }
+
+    void shapes(const Tab &t, SysInfo &s, int body)
+    {
+        Entry *e = t.get("shape");
+        if (!e) return;
+        std::string p = t.kp("shape");
+        auto list = tables_of(*e->val, p, "[[...shape]]");
+        for (size_t i = 0; i < list.size(); i++)
+            shape(*list[i], e->val->kind == NK::Array ? idx(p, i) : p, s, body, nullptr);
+    }
+
+    void actuator(Node &node, const std::string &path, int body, bool revolute)
+    {
+        Tab t(table_of(node, path), path, {"type", "tau", "table", "kp", "kd", "qref_deg", "qref", "tau0"});
+        std::vector<std::string> types = {"none", "constant", "table", "pd"};
+        std::string ty = choice_of(t.need("type", "one of " + list(types)), t.kp("type"), types);
+        std::vector<std::string> takes;
+        if (ty == "constant") takes = {"tau"};
+        else if (ty == "table") takes = {"table"};
+        else if (ty == "pd") takes = {"kp", "kd", revolute ? "qref_deg" : "qref", "tau0"};
+        for (auto &e : node.tab) {
+            if (e.key == "type") continue;
+            if (std::find(takes.begin(), takes.end(), e.key) != takes.end()) continue;
+            if (ty == "pd" && (e.key == "qref" || e.key == "qref_deg"))
+                fail_at(e.kloc, t.kp(e.key.c_str()),
+                        revolute ? "a revolute joint's set-point is qref_deg [deg]"
+                                 : "a prismatic joint's set-point is qref [m]");
+            fail_at(e.kloc, t.kp(e.key.c_str()),
+                    "does not apply to a '" + ty + "' actuator" +
+                        (takes.empty() ? std::string(" (it takes no parameters)") : " (it takes: " + list(takes) + ")"));
+        }
+        cd_actuator a;
+        std::memset(&a, 0, sizeof a);
+        std::vector<double> tt, tv;
+        if (ty == "none") {
+            a.type = CD_ACT_NONE;
+        } else if (ty == "constant") {
+            a.type = CD_ACT_CONSTANT;
+            a.tau0 = t.need_num("tau", Range::Any);
+        } else if (ty == "table") {
+            a.type = CD_ACT_TABLE;
+            const Node &tb = t.need("table", "an array of [t, tau] rows");
+            std::string p = t.kp("table");
+            if (tb.kind != NK::Array || tb.arr.empty())
+                fail_at(tb.loc, p, "expected a non-empty array of [t, tau] rows, got " + render(tb));
+            for (size_t i = 0; i < tb.arr.size(); i++) {
+                double r[2];
+                vec_of(*tb.arr[i], idx(p, i), 2, r, Range::Any, "a row [t, tau]");
+                if (i > 0 && !(r[0] > tt.back()))
+                    fail_at(tb.arr[i]->loc, idx(p, i),
+                            "expected times strictly increasing, got t = " + fmt_num(r[0]) + " after t = " + fmt_num(tt.back()));
+                tt.push_back(r[0]);
+                tv.push_back(r[1]);
+            }
+            a.tbl_t = tt.data();
+            a.tbl_v = tv.data();
+            a.ntbl = (int)tt.size();
+        } else {
+            a.type = CD_ACT_PD;
+            a.kp = t.need_num("kp", Range::NonNeg);
+            a.kd = t.num("kd", 0.0, Range::NonNeg);
+            a.qref = revolute ? t.num("qref_deg", 0.0, Range::Any) * DEG : t.num("qref", 0.0, Range::Any);
+            a.tau0 = t.num("tau0", 0.0, Range::Any);
+        }
+        if (cd_model_set_actuator(m.get(), body, &a, &err) != CD_OK) builder_fail(node.loc, path);
+    }
+
+    void link(Node &node, const std::string &path, SysInfo &s)
+    {
+        Tab t(&node, path,
+              {"name", "parent", "joint", "axis", "origin", "rpy_deg", "quaternion", "mass", "com", "inertia",
+               "limit_deg", "limit", "q0_deg", "q0", "qd0_deg_s", "qd0", "checkpoints", "shape", "actuator"});
+        std::string name = name_of_node(t.need("name", "a name"), t.kp("name"));
+        if (name == "base")
+            fail_at(t.get("name")->val->loc, t.kp("name"), "expected a link name other than 'base' (reserved for the base body)");
+        if (name == s.name)
+            fail_at(t.get("name")->val->loc, t.kp("name"),
+                    "expected a link name different from its system's name '" + s.name + "' (the base body has that name)");
+        for (auto &b : s.bodies)
+            if (b.name == name)
+                fail_at(t.get("name")->val->loc, t.kp("name"),
+                        "expected a link name unique in system '" + s.name + "', got '" + name + "' twice");
+        cd_link_desc d = cd_link_desc_default();
+        d.name = name.c_str();
+        d.parent = s.bodies.back().id;  /* default: the previous link, or the base */
+        if (Entry *e = t.get("parent")) {
+            std::string pn = str_of(*e->val, t.kp("parent"));
+            std::vector<std::string> names;
+            int pid = -1;
+            for (auto &b : s.bodies) {
+                names.push_back(b.name);
+                if (b.name == pn) pid = b.id;
+            }
+            if (pid < 0)
+                fail_at(e->val->loc, t.kp("parent"),
+                        "expected 'base' or the name of an earlier link of system '" + s.name + "', got '" + pn + "'" +
+                            hint(pn, names));
+            d.parent = pid;
+        }
+        std::string jt = "revolute";
+        if (Entry *e = t.get("joint")) jt = choice_of(*e->val, t.kp("joint"), {"revolute", "prismatic"});
+        bool rev = jt == "revolute";
+        d.type = rev ? CD_JOINT_REVOLUTE : CD_JOINT_PRISMATIC;
+        /* keys of the other joint type: say which one applies */
+        struct Alt { const char *bad, *good, *unit; };
+        const Alt alts[] = {{"q0", "q0_deg", "deg"}, {"qd0", "qd0_deg_s", "deg/s"}, {"limit", "limit_deg", "deg"}};
+        for (const Alt &a : alts) {
+            const char *wrong = rev ? a.bad : a.good, *right = rev ? a.good : a.bad;
+            if (Entry *e = t.get(wrong))
+                fail_at(e->kloc, t.kp(wrong),
+                        std::string("does not apply to a ") + jt + " joint (use " + right + " [" +
+                            (rev ? a.unit : (std::strcmp(a.good, "qd0_deg_s") == 0 ? "m/s" : "m")) + "])");
+        }
+        if (Entry *e = t.get("axis")) {
+            vec_of(*e->val, t.kp("axis"), 3, d.axis);
+            if (!(cd_v3_norm(d.axis) > 1e-12)) fail_at(e->val->loc, t.kp("axis"), "expected a non-zero axis, got " + render(*e->val));
+        }
+        t.vec("origin", 3, d.pos);
+        rotation_of(t, d.rot);
+        d.mass = t.need_num("mass", Range::Pos);
+        t.vec("com", 3, d.com);
+        inertia_of(t.need("inertia", "an inertia (3, 6 or 3x3 numbers)"), t.kp("inertia"), d.inertia);
+        const char *q0k = rev ? "q0_deg" : "q0", *qd0k = rev ? "qd0_deg_s" : "qd0", *limk = rev ? "limit_deg" : "limit";
+        double sc = rev ? DEG : 1.0;
+        double q0u = t.num(q0k, 0.0, Range::Any);
+        d.q0 = q0u * sc;
+        d.qd0 = t.num(qd0k, 0.0, Range::Any) * sc;
+        if (Entry *e = t.get(limk)) {
+            double lim[2];
+            vec_of(*e->val, t.kp(limk), 2, lim, Range::Any, "an array [lower, upper]");
+            if (!(lim[0] < lim[1]))
+                fail_at(e->val->loc, t.kp(limk), "expected lower < upper, got " + render(*e->val));
+            if (q0u < lim[0] || q0u > lim[1])
+                fail_at(t.get(q0k) ? t.get(q0k)->val->loc : e->val->loc, t.kp(q0k),
+                        "expected an initial position within " + std::string(limk) + " " + render(*e->val) + ", got " +
+                            fmt_num(q0u));
+            /* limits are accepted and checked against q0 but not enforced during a run (docs) */
+        }
+        int id = cd_model_add_link(m.get(), s.id, &d, &err);
+        if (id < 0) builder_fail(node.loc, path);
+        s.bodies.push_back(BodyInfo{name, id, 0});
+        checkpoints(t, s.bodies.back());
+        shapes(t, s, id);
+        if (Entry *e = t.get("actuator")) actuator(*e->val, t.kp("actuator"), id, rev);
+    }
+
+    /* [[system]] (is_target = false) or the [[target]] sugar */
+    void system(Node &node, const std::string &path, bool is_target)
+    {
+        std::vector<std::string> keys = {"name",        "mass",     "inertia",          "position",
+                                         "rpy_deg",     "quaternion", "velocity",       "angular_velocity",
+                                         "angular_velocity_deg_s", "checkpoints", "shape"};
+        if (!is_target) {
+            keys.push_back("base");
+            keys.push_back("link");
+        }
+        Tab t(&node, path, keys);
+        SysInfo s;
+        s.name = name_of_node(t.need("name", "a name"), t.kp("name"));
+        s.loc = node.loc;
+        s.path = path;
+        if (find_sys(s.name))
+            fail_at(t.get("name")->val->loc, t.kp("name"),
+                    "expected a system name unique in the scenario (systems and targets), got '" + s.name + "' twice");
+        cd_system_desc d = cd_system_desc_default();
+        d.name = s.name.c_str();
+        bool fixed = false;
+        if (Entry *e = t.get("base")) fixed = choice_of(*e->val, t.kp("base"), {"free", "fixed"}) == "fixed";
+        d.type = fixed ? CD_BASE_FIXED : CD_BASE_FREE;
+        if (fixed) {
+            d.mass = t.num("mass", 1.0, Range::Pos);
+            if (Entry *e = t.get("inertia")) inertia_of(*e->val, t.kp("inertia"), d.inertia);
+        } else {
+            d.mass = t.need_num("mass", Range::Pos);
+            inertia_of(t.need("inertia", "an inertia (3, 6 or 3x3 numbers)"), t.kp("inertia"), d.inertia);
+        }
+        t.vec("position", 3, d.pos);
+        double R[9];
+        rotation_of(t, R);
+        if (Entry *e = t.get("quaternion")) {
+            vec_of(*e->val, t.kp("quaternion"), 4, d.quat);  /* kept as given (normalised by the builder) */
+        } else {
+            cd_m3_to_quat(d.quat, R);
+        }
+        Entry *w = t.get("angular_velocity"), *wd = t.get("angular_velocity_deg_s");
+        if (w && wd)
+            fail_at(wd->kloc, t.kp("angular_velocity_deg_s"), "give either angular_velocity [rad/s] or angular_velocity_deg_s, not both");
+        if (fixed)
+            for (const char *k : {"velocity", "angular_velocity", "angular_velocity_deg_s"})
+                if (Entry *e = t.get(k))
+                    fail_at(e->kloc, t.kp(k), "applies only to a free base (this system has base = \"fixed\")");
+        t.vec("velocity", 3, d.vel);
+        if (w) vec_of(*w->val, t.kp("angular_velocity"), 3, d.angvel);
+        if (wd) {
+            vec_of(*wd->val, t.kp("angular_velocity_deg_s"), 3, d.angvel);
+            for (double &v : d.angvel) v *= DEG;
+        }
+        s.id = cd_model_add_system(m.get(), &d, &err);
+        if (s.id < 0) builder_fail(node.loc, path);
+        s.bodies.push_back(BodyInfo{"base", m->sys_body_adr[s.id], 0});
+        sys.push_back(s);
+        SysInfo &S = sys.back();
+        checkpoints(t, S.bodies[0]);
+        if (is_target) {
+            Entry *e = t.get("shape");
+            if (!e) t.need("shape", "a table {type = ..., sizes}");
+            shape(*table_of(*e->val, t.kp("shape")), t.kp("shape"), S, S.bodies[0].id, "shape");
+        } else {
+            shapes(t, S, S.bodies[0].id);
+            if (Entry *e = t.get("link")) {
+                std::string p = t.kp("link");
+                auto links = tables_of(*e->val, p, "[[system.link]]");
+                for (size_t i = 0; i < links.size(); i++)
+                    link(*links[i], e->val->kind == NK::Array ? idx(p, i) : p, S);
+            }
+        }
+    }
+
+    /* The contact law of one level ([contact] or a [[pair]]) on top of `in`. */
+    LawState law(const Tab &t, const LawState &in)
+    {
+        LawState s = in;
+        cd_contact_law &l = s.law;
+        Entry *rule = t.get("rule"), *K = t.get("K"), *D = t.get("D");
+        if (rule && (K || D)) {
+            Entry *e = K ? K : D;
+            fail_at(e->kloc, t.kp(e->key.c_str()), "K and D are computed from the 'rule' table here; give one or the other");
+        }
+        if (rule) {
+            std::string rp = t.kp("rule");
+            Tab r(table_of(*rule->val, rp), rp, {"k_soft", "k_ratio", "m_eff", "zeta"});
+            double ks = r.need_num("k_soft", Range::Pos), kr = r.need_num("k_ratio", Range::Pos);
+            double me = r.need_num("m_eff", Range::Pos), z = r.num("zeta", 1.0, Range::NonNeg);
+            cd_contact_law x = cd_contact_law_from_rule(ks, kr, me, z, l.mu_s);
+            l.K = x.K;
+            l.D = x.D;
+        }
+        if (K) l.K = num_of(*K->val, t.kp("K"), Range::Pos);
+        if (D) l.D = num_of(*D->val, t.kp("D"), Range::NonNeg);
+        if (Entry *e = t.get("p")) l.p = num_of(*e->val, t.kp("p"), Range::Ge1);
+        if (Entry *e = t.get("q")) l.q = num_of(*e->val, t.kp("q"), Range::Pos);
+        if (Entry *e = t.get("K_t")) { l.Kt = num_of(*e->val, t.kp("K_t"), Range::Pos); s.kt_set = true; }
+        else if (!s.kt_set) l.Kt = l.K;
+        if (Entry *e = t.get("D_t")) { l.Dt = num_of(*e->val, t.kp("D_t"), Range::NonNeg); s.dt_set = true; }
+        else if (!s.dt_set) l.Dt = l.D;
+        Entry *ms = t.get("mu_max"), *mk = t.get("mu");
+        if (ms) l.mu_s = num_of(*ms->val, t.kp("mu_max"), Range::NonNeg);
+        if (mk) { l.mu_k = num_of(*mk->val, t.kp("mu"), Range::NonNeg); s.mu_set = true; }
+        else if (!s.mu_set) l.mu_k = l.mu_s;
+        if (l.mu_k > l.mu_s) {
+            if (mk) fail_at(mk->val->loc, t.kp("mu"), "expected mu <= mu_max = " + fmt_num(l.mu_s) + ", got " + fmt_num(l.mu_k));
+            fail_at(ms ? ms->val->loc : t.n->loc, t.kp("mu_max"),
+                    "expected mu_max >= mu = " + fmt_num(l.mu_k) + ", got " + fmt_num(l.mu_s));
+        }
+        return s;
+    }
+
+    void pair(Node &node, const std::string &path, const LawState &def, int &def_law)
+    {
+        std::vector<std::string> keys = {"name", "checkpoints", "shape"};
+        keys.insert(keys.end(), LAW_KEYS.begin(), LAW_KEYS.end());
+        Tab t(&node, path, keys);
+        if (Entry *e = t.get("name")) name_of_node(*e->val, t.kp("name"));
+        /* checkpoints = "system" or "system/link" ("system/base" for the base body) */
+        const Node &cn = t.need("checkpoints", "\"system\" or \"system/link\"");
+        std::string cs = str_of(cn, t.kp("checkpoints"));
+        std::string sname = cs.substr(0, cs.find('/'));
+        SysInfo *cps = find_sys(sname);
+        if (!cps)
+            fail_at(cn.loc, t.kp("checkpoints"), "expected \"system\" or \"system/link\", got '" + cs + "': no system '" + sname + "'" +
+                    hint(sname, sys_names()));
+        int body = -1, ncp = 0;
+        if (cs.find('/') != std::string::npos) {
+            std::string bn = cs.substr(cs.find('/') + 1);
+            std::vector<std::string> names;
+            for (auto &b : cps->bodies) {
+                names.push_back(b.name);
+                if (b.name == bn) { body = b.id; ncp = b.ncp; }
+            }
+            if (body < 0)
+                fail_at(cn.loc, t.kp("checkpoints"),
+                        "expected \"system/link\", got '" + cs + "': system '" + sname + "' has no link '" + bn + "'" + hint(bn, names));
+            if (ncp == 0)
+                fail_at(cn.loc, t.kp("checkpoints"), "expected a body with check points, got '" + cs + "' which has none");
+        } else {
+            for (auto &b : cps->bodies) ncp += b.ncp;
+            if (ncp == 0)
+                fail_at(cn.loc, t.kp("checkpoints"), "expected a system with check points, got '" + cs + "' which has none");
+        }
+        /* shape = "system/shape", or "system" when that system has exactly one shape */
+        const Node &sn = t.need("shape", "\"system/shape\"");
+        std::string ss = str_of(sn, t.kp("shape"));
+        std::string shs = ss.substr(0, ss.find('/'));
+        SysInfo *shsys = find_sys(shs);
+        if (!shsys)
+            fail_at(sn.loc, t.kp("shape"), "expected \"system/shape\", got '" + ss + "': no system '" + shs + "'" + hint(shs, sys_names()));
+        int shape = -1;
+        std::vector<std::string> names;
+        for (auto &x : shsys->shapes) names.push_back(x.first);
+        if (ss.find('/') != std::string::npos) {
+            std::string nm = ss.substr(ss.find('/') + 1);
+            for (auto &x : shsys->shapes)
+                if (x.first == nm) shape = x.second;
+            if (shape < 0)
+                fail_at(sn.loc, t.kp("shape"),
+                        "expected \"system/shape\", got '" + ss + "': system '" + shs + "' has no shape '" + nm + "'" +
+                            (names.empty() ? std::string(" (it has no shapes)") : hint(nm, names)));
+        } else {
+            if (shsys->shapes.size() != 1)
+                fail_at(sn.loc, t.kp("shape"),
+                        "expected \"system/shape\", got '" + ss + "': system '" + shs + "' has " +
+                            std::to_string(shsys->shapes.size()) + " shapes, name one" +
+                            (names.empty() ? std::string() : " (" + list(names) + ")"));
+            shape = shsys->shapes[0].second;
+        }
+        bool own = false;
+        for (auto &k : LAW_KEYS)
+            if (t.get(k.c_str())) own = true;
+        int lid;
+        if (own) {
+            LawState ls = law(t, def);
+            lid = cd_model_add_law(m.get(), &ls.law, &err);
+            if (lid < 0) builder_fail(node.loc, path);
+        } else {
+            if (def_law < 0) {
+                def_law = cd_model_add_law(m.get(), &def.law, &err);
+                if (def_law < 0) builder_fail(node.loc, path);
+            }
+            lid = def_law;
+        }
+        if (cd_model_add_pair(m.get(), cps->id, body, shape, lid, &err) < 0) builder_fail(node.loc, path);
+    }
+
+    struct Run {
+        std::string title;
+        double duration = 0, output_dt = 0, flush_every = 1.0;
+        int event_capacity = 4096;
+    };
+
+    void build(Node &root, Run &run, const std::string &path)
+    {
+        m.reset(cd_model_create());
+        if (!m) throw std::bad_alloc();
+        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper"});
+        if (Entry *e = top.get("include"))
+            fail_at(e->kloc, "include", "expected 'include' only at the top of a file, got it from an override");
+
+        /* title (default: the file name without directory and extension) */
+        if (Entry *e = top.get("title")) {
+            run.title = str_of(*e->val, "title");
+        } else {
+            run.title = std::filesystem::path(path).stem().string();
+        }
+
+        /* [simulation] */
+        {
+            Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
+            Tab t(&sn, "simulation",
+                  {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
+                   "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity"});
+            cd_options &o = m->opt;
+            run.duration = t.need_num("duration", Range::Pos);
+            t.vec("gravity", 3, m->gravity);
+            if (Entry *e = t.get("integrator")) {
+                std::vector<std::string> names;
+                for (int i = 0; i < CD_STEP_NTYPES; i++) names.push_back(cd_stepper_name((cd_stepper)i));
+                o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
+            }
+            o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
+            o.atol = t.num("atol", o.atol, Range::NonNeg);
+            if (!(o.rtol + o.atol > 0))
+                fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");
+            o.h_init = t.num("h_init", o.h_init, Range::Pos);
+            o.h_max = t.num("h_max", o.h_max, Range::NonNeg);
+            o.h_min = t.num("h_min", o.h_min, Range::NonNeg);
+            if (o.h_max > 0 && o.h_min > o.h_max)
+                fail_at(t.get("h_min") ? t.get("h_min")->val->loc : sn.loc, t.kp("h_min"),
+                        "expected h_min <= h_max = " + fmt_num(o.h_max) + ", got " + fmt_num(o.h_min));
+            o.h_fixed = t.num("h_fixed", o.h_fixed, Range::Pos);
+            if (Entry *e = t.get("max_steps")) o.max_steps = (long)int_of(*e->val, t.kp("max_steps"), 1);
+            o.event_tol = t.num("event_tol", o.event_tol, Range::Pos);
+            o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
+            o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
+            o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
+            run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
+            run.flush_every = t.num("flush_every", 1.0, Range::Pos);
+            if (Entry *e = t.get("event_capacity")) {
+                long long v = int_of(*e->val, t.kp("event_capacity"), 1);
+                if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
+                run.event_capacity = (int)v;
+            }
+        }
+
+        /* [contact] defaults */
+        LawState def;
+        def.law = cd_contact_law_default();
+        if (Entry *e = top.get("contact")) {
+            Tab t(table_of(*e->val, "contact"), "contact", LAW_KEYS);
+            def = law(t, def);
+        }
+
+        /* systems, then targets (their ids follow this order) */
+        Entry *se = top.get("system"), *te = top.get("target");
+        if (!se && !te)
+            fail_at(root.loc, "system", "missing required key (expected at least one [[system]] or [[target]])");
+        if (se) {
+            auto v = tables_of(*se->val, "system", "[[system]]");
+            for (size_t i = 0; i < v.size(); i++) system(*v[i], se->val->kind == NK::Array ? idx("system", i) : "system", false);
+        }
+        if (te) {
+            auto v = tables_of(*te->val, "target", "[[target]]");
+            for (size_t i = 0; i < v.size(); i++) system(*v[i], te->val->kind == NK::Array ? idx("target", i) : "target", true);
+        }
+
+        /* [gripper] */
+        if (Entry *e = top.get("gripper")) {
+            Tab t(table_of(*e->val, "gripper"), "gripper", {"type", "system"});
+            const Node &tn = t.need("type", "'torque'");
+            std::string ty = str_of(tn, t.kp("type"));
+            if (ty == "soft_gripper" || ty == "tako" || ty == "space_gripper")
+                fail_at(tn.loc, t.kp("type"), "expected 'torque', got '" + ty + "' (reserved for a later version of capdyn)");
+            choice_of(tn, t.kp("type"), {"torque"});
+            if (Entry *g = t.get("system")) {
+                std::string gs = str_of(*g->val, t.kp("system"));
+                if (!find_sys(gs))
+                    fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+            }
+            /* type "torque": the joints are driven by their own `actuator` tables */
+        }
+
+        /* [[pair]] */
+        if (Entry *e = top.get("pair")) {
+            int def_law = -1;
+            auto v = tables_of(*e->val, "pair", "[[pair]]");
+            for (size_t i = 0; i < v.size(); i++) pair(*v[i], e->val->kind == NK::Array ? idx("pair", i) : "pair", def, def_law);
+        }
+
+        if (cd_model_finalize(m.get(), &err) != CD_OK) builder_fail(root.loc, "");
+    }
+};
+
+char *cdup(const std::string &s)
+{
+    char *r = (char *)std::malloc(s.size() + 1);
+    if (!r) throw std::bad_alloc();
+    std::memcpy(r, s.c_str(), s.size() + 1);
+    return r;
+}
+
+void set_err(cd_error *err, cd_status st, const std::string &msg)
+{
+    if (!err) return;
+    err->status = st;
+    std::snprintf(err->msg, sizeof err->msg, "%s", msg.c_str());
+}
+
+void free_scenario(cd_scenario *sc)
+{
+    if (!sc) return;
+    cd_model_free(sc->model);
+    std::free(sc->path);
+    std::free(sc->title);
+    std::free(sc->text);
+    std::free(sc->overrides);
+    std::free(sc);
+}
+
+cd_scenario *load(const char *path, const char *const *overrides, int noverrides)
+{
+    if (!path) throw LoadError{CD_EINVAL, "scenario path is NULL"};
+    if (noverrides < 0 || (noverrides > 0 && !overrides)) throw LoadError{CD_EINVAL, "overrides: bad array"};
+    FileLoader fl;
+    NodeP root = fl.load(path, nullptr, "");
+    std::string ovtext;
+    for (int i = 0; i < noverrides; i++) {
+        if (!overrides[i]) throw LoadError{CD_EINVAL, "override " + std::to_string(i) + " is NULL"};
+        apply_override(root, overrides[i]);
+        ovtext += overrides[i];
+        ovtext += "\n";
+    }
+    Builder b;
+    Builder::Run run;
+    b.build(*root, run, path);
+
+    cd_scenario *sc = (cd_scenario *)std::calloc(1, sizeof *sc);
+    if (!sc) throw std::bad_alloc();
+    try {
+        sc->path = cdup(path);
+        sc->title = cdup(run.title);
+        sc->text = cdup(fl.text);
+        sc->overrides = cdup(ovtext);
+    } catch (...) {
+        free_scenario(sc);
+        throw;
+    }
+    sc->model = b.m.release();
+    sc->duration = run.duration;
+    sc->output_dt = run.output_dt;
+    sc->flush_every = run.flush_every;
+    sc->event_capacity = run.event_capacity;
+    return sc;
+}
+
+}  // namespace
+
+extern "C" cd_scenario *cd_scenario_load(const char *path, const char *const *overrides, int noverrides,
+                                         cd_error *err)
+{
+    try {
+        cd_scenario *sc = load(path, overrides, noverrides);
+        if (err) {
+            err->status = CD_OK;
+            err->msg[0] = 0;
+        }
+        return sc;
+    } catch (const LoadError &e) {
+        set_err(err, e.st, e.msg);
+    } catch (const std::bad_alloc &) {
+        set_err(err, CD_ENOMEM, "out of memory while loading the scenario");
+    } catch (const std::exception &e) {
+        set_err(err, CD_EINVAL, std::string("internal error while loading the scenario: ") + e.what());
+    } catch (...) {
+        set_err(err, CD_EINVAL, "internal error while loading the scenario");
+    }
+    return nullptr;
+}
+
+extern "C" void cd_scenario_free(cd_scenario *sc) { free_scenario(sc); }
