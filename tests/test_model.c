@@ -418,12 +418,49 @@ Test(model, pair_rejections)
     clear(&e);
     check_reject(cd_model_add_pair(m, 0, -1, 7, law, &e), 0, &e, "no shape", "no shape 7", NULL);
     clear(&e);
-    check_reject(cd_model_add_pair(m, 0, -1, sh_own, law, &e), 0, &e, "self-contact", "self-contact", "'sat'");
+    check_reject(cd_model_add_pair(m, 0, 1, sh_own, law, &e), 0, &e, "same-body contact", "its own shape",
+                 "'shoulder'");
     clear(&e);
     check_reject(cd_model_add_pair(m, 0, 2, sh_other, 3, &e), 0, &e, "no law", "no contact law 3", NULL);
     cr_expect(m->npair == 0);
     clear(&e);
     cr_expect(cd_model_add_pair(m, 0, 2, sh_other, law, &e) == 0, "valid pair rejected: %s", e.msg);
+    /* inside one system: the elbow's check point against the shoulder's own
+     * shape is jointed to it, so the system-wide pair makes no slot for it */
+    cr_expect(cd_model_add_pair(m, 0, -1, sh_own, law, &e) == 1, "intra-system pair rejected: %s", e.msg);
+    cr_assert(cd_model_finalize(m, &e) == CD_OK, "%s", e.msg);
+    cr_expect_eq(m->nslot, 1, "only the elbow-vs-target slot: %d", m->nslot);
+    cr_expect_eq(m->slot_shape[0], sh_other);
+    cd_model_free(m);
+}
+
+Test(model, intra_system_pair_between_non_adjacent_links)
+{
+    /* base - a1 - a2 and base - b1 (two fingers of one hand): the check
+     * points of a2 and of a1 against b1's shape are slots (a1 and b1 are
+     * siblings, not jointed to each other); b1's own check point is not. */
+    cd_model *m = cd_model_create();
+    cd_system_desc s = cd_system_desc_default();
+    cd_link_desc l = cd_link_desc_default();
+    cd_contact_law L = cd_contact_law_default();
+    cd_error e;
+    double p[3] = {0, 0, 0}, r[3] = {0.01, 0, 0};
+    int a1, a2, b1, sh, law;
+    s.name = "hand";
+    cr_assert(cd_model_add_system(m, &s, &e) == 0);
+    l.parent = 0; l.name = "a1"; a1 = cd_model_add_link(m, 0, &l, &e);
+    l.parent = a1; l.name = "a2"; a2 = cd_model_add_link(m, 0, &l, &e);
+    l.parent = 0; l.name = "b1"; b1 = cd_model_add_link(m, 0, &l, &e);
+    cd_model_add_checkpoint(m, a1, p, 0.01, &e);
+    cd_model_add_checkpoint(m, a2, p, 0.01, &e);
+    cd_model_add_checkpoint(m, b1, p, 0.01, &e);
+    sh = cd_model_add_shape(m, b1, CD_SHAPE_SPHERE, NULL, NULL, r, NULL, 0, &e);
+    law = cd_model_add_law(m, &L, &e);
+    cr_assert(cd_model_add_pair(m, 0, -1, sh, law, &e) == 0, "%s", e.msg);
+    cr_assert(cd_model_finalize(m, &e) == CD_OK, "%s", e.msg);
+    cr_expect_eq(m->nslot, 2);
+    cr_expect_eq(m->cp_body[m->slot_cp[0]], a1);
+    cr_expect_eq(m->cp_body[m->slot_cp[1]], a2);
     cd_model_free(m);
 }
 

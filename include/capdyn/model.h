@@ -211,6 +211,10 @@ typedef struct cd_model {
     double *shape_size;   /* (nshape x 3), meaning per type */
     int *shape_vert_adr, *shape_vert_num;
     double *vert;         /* (nvert x 3) shape frame [m] */
+    int nface;            /* hull faces of the convex shapes, built at finalize */
+    int *shape_face_adr, *shape_face_num;
+    int *face_vert;       /* (nface x 3) vertex indices (into vert) of a face triangle */
+    double *face_plane;   /* (nface x 4) outward unit normal and offset: n.p = o on the face */
 
     /* contact laws and pairs (check points of a system/body x one shape) */
     cd_contact_law *law;
@@ -237,9 +241,12 @@ int cd_model_add_shape(cd_model *m, int body, cd_shape_type type, const double p
                        int nvert, cd_error *err);
 int cd_model_add_law(cd_model *m, const cd_contact_law *law, cd_error *err);
 /* Check points of system `sys` (only those of `body` if body >= 0) against
- * shape `shape` with law `law`. The shape must belong to another system. If
- * several pairs produce the same (check point, shape) slot, the first pair's
- * law is kept. */
+ * shape `shape` with law `law`. The shape may belong to the same system (finger
+ * against finger of one hand): slots are then not made for check points on
+ * the shape's own body or on the bodies jointed to it (parent, children),
+ * which touch it at the joint by construction; body == the shape's body is
+ * an error. If several pairs produce the same (check point, shape) slot, the
+ * first pair's law is kept. */
 int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_error *err);
 /* Sets the actuator of a joint body (table arrays are copied). */
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err);

@@ -157,16 +157,18 @@ double cd_potential_energy(const cd_model *m, const cd_data *d, int s);
 cd_status cd_forward(const cd_model *m, cd_data *d);
 
 /* ---- contact geometry (exposed for tests and tools) ------------------------- */
-/* Signed distance from a point (shape frame) to an analytic shape (>0 outside),
- * outward unit normal and closest surface point (shape frame). Returns 0, or
- * -1 if the answer is not finite. For CD_SHAPE_CONVEX uses libccd (MPR) with
- * a sphere of radius `radius`; the distance returned is then only exact when
- * penetrating (see docs/contact.md). */
+/* Signed distance from a point (shape frame) to a shape of a finalized model
+ * (>0 outside), outward unit normal and closest surface point (shape frame):
+ * exact for every type, convex hulls included (face planes built at
+ * finalize). radius is unused (kept for symmetry with the libccd query).
+ * Returns 0, or -1 if the answer is not finite. */
 int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
                       double *dist, double n[3], double s[3]);
-/* The same answer computed through libccd (MPR penetration of a sphere of
- * radius `radius` against the shape's support function). Valid only when the
- * sphere penetrates; returns 1 when separated, 0 on success, -1 on a bad answer. */
+/* The same answer computed independently through libccd (GJK/EPA penetration
+ * of a sphere of radius `radius` against the shape's support function;
+ * accurate to ~1e-6 m, allocates: for tests and tools, never used in a step).
+ * Valid only when the sphere penetrates; returns 1 when separated, 0 on
+ * success, -1 on a bad answer or for a plane. */
 int cd_shape_distance_ccd(const cd_model *m, int shape, const double p[3], double radius,
                           double *dist, double n[3], double s[3]);
 

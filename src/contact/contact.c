@@ -44,20 +44,14 @@ static void shape_pose(const cd_model *m, const cd_data *d, int sh, double R[9],
 
 /* query in world coordinates; returns 0 ok, 1 separated (libccd, d lower bound), -1 bad */
 static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r,
-                       int use_epa, double *dist, double n[3], double s[3])
+                       double *dist, double n[3], double s[3])
 {
     double R[9], x[3], pl[3], t[3], nl[3], sl[3];
-    int type = m->shape_type[sh], res;
+    int res;
     shape_pose(m, d, sh, R, x);
     cd_v3_sub(t, pw, x);
     cd_m3_tmulv(pl, R, t);
-    if (type == CD_SHAPE_CONVEX || use_epa >= 0) {
-        int epa = use_epa > 0;
-        res = cd_geom_ccd(type, m->shape_size + 3 * sh, m->vert + 3 * m->shape_vert_adr[sh],
-                          m->shape_vert_num[sh], pl, r, epa, epa ? 1e-12 : 1e-12, dist, nl, sl);
-    } else {
-        res = cd_geom_analytic(type, m->shape_size + 3 * sh, pl, dist, nl, sl);
-    }
+    res = cd_shape_distance(m, sh, pl, r, dist, nl, sl);
     if (res == 0) {
         cd_m3_mulv(n, R, nl);
         cd_m3_mulv(t, R, sl);
@@ -69,10 +63,11 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
 int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
                       double *dist, double n[3], double s[3])
 {
-    int type = m->shape_type[shape];
+    int type = m->shape_type[shape], fa = m->shape_face_adr[shape];
+    (void)radius;
     if (type == CD_SHAPE_CONVEX)
-        return cd_geom_ccd(type, m->shape_size + 3 * shape, m->vert + 3 * m->shape_vert_adr[shape],
-                           m->shape_vert_num[shape], p, radius, 0, 1e-12, dist, n, s) < 0 ? -1 : 0;
+        return cd_geom_hull(m->vert, m->face_vert + 3 * fa, m->face_plane + 4 * fa, m->shape_face_num[shape], p,
+                            dist, n, s);
     return cd_geom_analytic(type, m->shape_size + 3 * shape, p, dist, n, s);
 }
 
@@ -104,15 +99,15 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
         double *z = d->y + m->ny_slot_adr + 3 * k;
         cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
-        res = query_world(m, d, sh, pw, r, -1, &dist, n, s);
+        res = query_world(m, d, sh, pw, r, &dist, n, s);
         d->slot_geomfail[k] = (res < 0);
         zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
         if (res != 0) {
-            /* separated per libccd (dist is a lower bound) or a bad answer: no force */
-            x = res > 0 ? r - dist : 0.0;
+            /* a rejected geometry answer: no force, reported by the integrator */
+            x = 0.0;
             d->slot_x[k] = x;
             d->slot_xdot[k] = 0;
-            d->slot_fnraw[k] = res > 0 ? x : 0.0; /* negative: keeps the onset function signed */
+            d->slot_fnraw[k] = 0.0;
             d->slot_fn[k] = 0;
             cd_v3_zero(d->slot_ft + 3 * k);
             cd_v3_zero(d->slot_vt + 3 * k);

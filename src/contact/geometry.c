@@ -2,14 +2,17 @@
  *
  * Analytic shapes give an exact signed distance of the centre (>0 outside),
  * the outward unit normal and the closest surface point, all in the shape
- * frame. Convex hulls (and, for cross-checking, every bounded primitive) go
- * through libccd. libccd traps, measured and tracked upstream: GJK/EPA returns
- * a NaN normal for touching boxes (issue #25) and allocates per query; MPR
- * allocates nothing but its depth is the depth along the portal found from
- * the two centres, exact for a sphere against a flat face or another sphere,
- * approximate elsewhere. The rhs therefore uses MPR with a bounded iteration
- * count and checks every answer (finite depth, unit normal); a bad answer is
- * reported (-1) and becomes a logged event, never silent data. */
+ * frame. Convex hulls are exact too, from face planes built at finalize.
+ *
+ * Why not libccd in the right-hand side (measured in tests/test_contact_geometry.c
+ * and tracked upstream): MPR allocates nothing but its depth is the depth
+ * along the ray from the shape's centre, not the minimum (0.38 m wrong for a
+ * deep point in a box hull, 48 deg off in the normal); GJK/EPA finds the
+ * minimum but allocates per query, stops on a *squared* tolerance (1e-12
+ * gives 1e-6 m), has no iteration bound in EPA, returns a NaN normal for
+ * touching boxes (libccd #25) and a false depth 0 on ~0.2 % of sphere poses.
+ * libccd (GJK/EPA, bounded, every answer checked) stays the independent
+ * cross-check of every shape: cd_shape_distance_ccd. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "geometry.h"
@@ -109,6 +112,89 @@ int cd_geom_analytic(int type, const double size[3], const double p[3], double *
     default: return -1;
     }
     return (isfinite(*d) && cd_v3_isfinite(n) && cd_v3_isfinite(s)) ? 0 : -1;
+}
+
+/* ---- convex hulls: exact, from the face planes built at finalize ---------- */
+
+/* Closest point to p on triangle (a, b, c): the Voronoi-region walk of
+ * Ericson, Real-Time Collision Detection, sec. 5.1.5. */
+static void closest_on_triangle(const double p[3], const double a[3], const double b[3], const double c[3],
+                                double q[3])
+{
+    double ab[3], ac[3], ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, v, w, den;
+    cd_v3_sub(ab, b, a);
+    cd_v3_sub(ac, c, a);
+    cd_v3_sub(ap, p, a);
+    d1 = cd_v3_dot(ab, ap);
+    d2 = cd_v3_dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) { cd_v3_copy(q, a); return; }
+    cd_v3_sub(bp, p, b);
+    d3 = cd_v3_dot(ab, bp);
+    d4 = cd_v3_dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) { cd_v3_copy(q, b); return; }
+    vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) {
+        v = d1 / (d1 - d3);
+        cd_v3_copy(q, a); cd_v3_axpy(q, v, ab);
+        return;
+    }
+    cd_v3_sub(cp, p, c);
+    d5 = cd_v3_dot(ab, cp);
+    d6 = cd_v3_dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) { cd_v3_copy(q, c); return; }
+    vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) {
+        w = d2 / (d2 - d6);
+        cd_v3_copy(q, a); cd_v3_axpy(q, w, ac);
+        return;
+    }
+    va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        double bc[3];
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        cd_v3_sub(bc, c, b);
+        cd_v3_copy(q, b); cd_v3_axpy(q, w, bc);
+        return;
+    }
+    den = 1.0 / (va + vb + vc);
+    v = vb * den;
+    w = vc * den;
+    cd_v3_copy(q, a); cd_v3_axpy(q, v, ab); cd_v3_axpy(q, w, ac);
+}
+
+int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, const double p[3], double *d,
+                 double n[3], double s[3])
+{
+    int f, best = 0;
+    double hmax = -HUGE_VAL;
+    if (!cd_v3_isfinite(p)) return -1;
+    /* inside (or on) the hull: the signed distance is the largest plane distance */
+    for (f = 0; f < nf; f++) {
+        double h = cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
+        if (h > hmax) { hmax = h; best = f; }
+    }
+    if (hmax <= 0) {
+        *d = hmax;
+        cd_v3_copy(n, fp + 4 * best);
+        cd_v3_copy(s, p);
+        cd_v3_axpy(s, -hmax, n);
+        return 0;
+    }
+    /* outside: the nearest point over the face triangles */
+    {
+        double dmin = HUGE_VAL, q[3], t[3];
+        for (f = 0; f < nf; f++) {
+            double dd;
+            closest_on_triangle(p, vert + 3 * fv[3 * f], vert + 3 * fv[3 * f + 1], vert + 3 * fv[3 * f + 2], q);
+            cd_v3_sub(t, p, q);
+            dd = cd_v3_dot(t, t);
+            if (dd < dmin) { dmin = dd; cd_v3_copy(s, q); }
+        }
+        *d = sqrt(dmin);
+        cd_v3_sub(n, p, s);
+        cd_v3_scale(n, n, 1.0 / *d);
+    }
+    return (isfinite(*d) && cd_v3_isfinite(n)) ? 0 : -1;
 }
 
 /* ---- libccd: support functions in the shape frame ------------------------- */

@@ -7,6 +7,13 @@
  * n, closest surface point s. Returns 0, or -1 if not finite. */
 int cd_geom_analytic(int type, const double size[3], const double p[3], double *d, double n[3], double s[3]);
 
+/* Exact signed distance of point p (shape frame) to the convex hull given by
+ * nf face triangles fv (indices into vert) with outward planes fp (n, o):
+ * inside, the largest plane distance; outside, the nearest face triangle.
+ * Returns 0, or -1 if not finite. */
+int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, const double p[3], double *d,
+                 double n[3], double s[3]);
+
 /* libccd query of a sphere (centre p, radius r) against a shape (any type but
  * plane); d is the distance of the centre to the surface (r - depth), n the
  * normal from the shape toward the sphere, s the surface point. use_epa

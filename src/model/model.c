@@ -169,6 +169,7 @@ void cd_model_free(cd_model *m)
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert);
+    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
     free(m->law); free(m->pair_sys); free(m->pair_body); free(m->pair_shape); free(m->pair_law);
     free(m->slot_cp); free(m->slot_shape); free(m->slot_law);
     free(m);
@@ -516,9 +517,9 @@ int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_err
         return -1;
     }
     if (shape < 0 || shape >= m->nshape) { seterr(err, CD_EINVAL, "pair: no shape %d", shape); return -1; }
-    if (m->body_sys[m->shape_body[shape]] == sys) {
-        seterr(err, CD_EINVAL, "pair: shape %d (%s on body '%s') belongs to system '%s' itself (self-contact is not supported)",
-               shape, cd_shape_type_name(m->shape_type[shape]), m->body_name[m->shape_body[shape]], m->sys_name[sys]);
+    if (body >= 0 && body == m->shape_body[shape]) {
+        seterr(err, CD_EINVAL, "pair: the check points of body '%s' cannot touch its own shape %d (%s)",
+               m->body_name[body], shape, cd_shape_type_name(m->shape_type[shape]));
         return -1;
     }
     if (law < 0 || law >= m->nlaw) { seterr(err, CD_EINVAL, "pair: no contact law %d", law); return -1; }
@@ -614,6 +615,64 @@ int cd_model_body_id(const cd_model *m, const char *name)
     return found;
 }
 
+/* Faces of the convex hull of shape sh's vertices, by brute force over
+ * vertex triples: a triple is a face when every vertex lies on one side of
+ * its plane (within 1e-9 of the hull's size). Coplanar faces with more than
+ * three vertices yield several overlapping triangles, which is harmless for
+ * the distance query. O(n^4): meant for hulls of tens of vertices, run once.
+ * With store == 0 only counts. Returns the number of faces. */
+static int hull_faces(cd_model *m, int sh, int store, int at)
+{
+    const double *v = m->vert + 3 * m->shape_vert_adr[sh];
+    int nv = m->shape_vert_num[sh], i, j, k, l, nf = 0;
+    double size = 0, c[3] = {0, 0, 0};
+    for (i = 0; i < nv; i++) {
+        double r = cd_v3_norm(v + 3 * i);
+        if (r > size) size = r;
+        cd_v3_axpy(c, 1.0 / nv, v + 3 * i);
+    }
+    for (i = 0; i < nv; i++)
+        for (j = i + 1; j < nv; j++)
+            for (k = j + 1; k < nv; k++) {
+                double a[3], b[3], n[3], o, len;
+                int pos = 0, neg = 0;
+                cd_v3_sub(a, v + 3 * j, v + 3 * i);
+                cd_v3_sub(b, v + 3 * k, v + 3 * i);
+                cd_v3_cross(n, a, b);
+                len = cd_v3_norm(n);
+                if (!(len > 1e-12 * size * size)) continue; /* collinear */
+                cd_v3_scale(n, n, 1.0 / len);
+                o = cd_v3_dot(n, v + 3 * i);
+                for (l = 0; l < nv && !(pos && neg); l++) {
+                    double h = cd_v3_dot(n, v + 3 * l) - o;
+                    if (h > 1e-9 * size) pos = 1;
+                    if (h < -1e-9 * size) neg = 1;
+                }
+                if (pos && neg) continue;
+                if (pos || (!neg && cd_v3_dot(n, c) - o > 0)) { cd_v3_scale(n, n, -1.0); o = -o; }
+                if (store) {
+                    int f = at + nf;
+                    m->face_vert[3 * f] = m->shape_vert_adr[sh] + i;
+                    m->face_vert[3 * f + 1] = m->shape_vert_adr[sh] + j;
+                    m->face_vert[3 * f + 2] = m->shape_vert_adr[sh] + k;
+                    cd_v3_copy(m->face_plane + 4 * f, n);
+                    m->face_plane[4 * f + 3] = o;
+                }
+                nf++;
+            }
+    return nf;
+}
+
+/* does pair i make a slot for check point k? */
+static int slot_wanted(const cd_model *m, int i, int k)
+{
+    int cb = m->cp_body[k], sb = m->shape_body[m->pair_shape[i]];
+    if (m->body_sys[cb] != m->pair_sys[i]) return 0;
+    if (m->pair_body[i] >= 0 && cb != m->pair_body[i]) return 0;
+    if (cb == sb || m->body_parent[cb] == sb || m->body_parent[sb] == cb) return 0;
+    return 1;
+}
+
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
     int s, b, i, k, nslot = 0, ny = 0, nv = 0;
@@ -645,12 +704,12 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
         nv += m->sys_ndof[s];
         ny += (base ? 7 : 0) + nj + m->sys_ndof[s];
     }
-    /* slots: every check point of a pair's system/body x the pair's shape */
+    /* slots: every check point of a pair's system/body x the pair's shape,
+     * except, inside one system, check points on the shape's own body and on
+     * the bodies jointed to it (they touch at the joint by construction) */
     for (i = 0; i < m->npair; i++)
         for (k = 0; k < m->ncp; k++)
-            if (m->body_sys[m->cp_body[k]] == m->pair_sys[i] &&
-                (m->pair_body[i] < 0 || m->cp_body[k] == m->pair_body[i]))
-                nslot++;
+            if (slot_wanted(m, i, k)) nslot++;
     m->slot_cp = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
     m->slot_shape = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
     m->slot_law = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
@@ -658,8 +717,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     nslot = 0;
     for (i = 0; i < m->npair; i++)
         for (k = 0; k < m->ncp; k++)
-            if (m->body_sys[m->cp_body[k]] == m->pair_sys[i] &&
-                (m->pair_body[i] < 0 || m->cp_body[k] == m->pair_body[i])) {
+            if (slot_wanted(m, i, k)) {
                 int j, dup = 0;
                 for (j = 0; j < nslot; j++)
                     if (m->slot_cp[j] == k && m->slot_shape[j] == m->pair_shape[i]) dup = 1;
@@ -670,6 +728,27 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
                 nslot++;
             }
     m->nslot = nslot;
+    /* hull faces of the convex shapes */
+    m->shape_face_adr = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));
+    m->shape_face_num = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));
+    if (!m->shape_face_adr || !m->shape_face_num) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+    m->nface = 0;
+    for (i = 0; i < m->nshape; i++)
+        if (m->shape_type[i] == CD_SHAPE_CONVEX) {
+            m->shape_face_adr[i] = m->nface;
+            m->shape_face_num[i] = hull_faces(m, i, 0, 0);
+            if (m->shape_face_num[i] < 4) {
+                seterr(err, CD_EINVAL, "convex shape %d on body '%s': its vertices span no volume", i,
+                       m->body_name[m->shape_body[i]]);
+                return CD_EINVAL;
+            }
+            m->nface += m->shape_face_num[i];
+        }
+    m->face_vert = malloc((size_t)(m->nface ? m->nface : 1) * 3 * sizeof(int));
+    m->face_plane = malloc((size_t)(m->nface ? m->nface : 1) * 4 * sizeof(double));
+    if (!m->face_vert || !m->face_plane) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+    for (i = 0; i < m->nshape; i++)
+        if (m->shape_type[i] == CD_SHAPE_CONVEX) hull_faces(m, i, 1, m->shape_face_adr[i]);
     m->nv = nv;
     m->ny_slot_adr = ny;
     m->ny = ny + 3 * nslot;

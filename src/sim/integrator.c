@@ -404,8 +404,8 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         st = settle_modes(m, d, I, &changed);
         if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
         if (changed) {
-            if (I->drv) gsl_odeiv2_evolve_reset(I->drv->e), gsl_odeiv2_step_reset(I->drv->s);
-            if (cb && cb(m, d, user)) return CD_EINTERRUPT;
+            if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
+            if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
         }
         tdw = next_dwell_end(m, d, I);
         if (tdw < t1) t1 = tdw;
@@ -419,6 +419,9 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             double t = t0, hmax = m->opt.h_max;
             long before = (long)I->drv->e->failed_steps;
             if (hmax > 0 && I->h > hmax) I->h = hmax;
+            /* a step that would end within round-off of t1 would leave a sliver
+             * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
+            if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
             status = gsl_odeiv2_evolve_apply(I->drv->e, I->drv->c, I->drv->s, &I->sys, &t, t1, &I->h, d->y);
             d->stats.nrejected += (long)I->drv->e->failed_steps - before;
             attempts += 1 + (long)I->drv->e->failed_steps - before;

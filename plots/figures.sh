@@ -1,0 +1,59 @@
+#!/usr/bin/env bash
+# Runs the paper scenarios with build/capdyn and renders their figures (PNG and
+# SVG, plus an animated GIF of the grasp) into figures/ (git-ignored).
+#
+#   plots/figures.sh                 (what `make figures` runs)
+#
+# Environment:
+#   CAPDYN         the capdyn binary (default build/capdyn)
+#   FIGURES_DIR    where to write (default figures)
+#   CAPDYN_RUN_ARGS  extra arguments for every `capdyn run`, e.g.
+#                  "--set simulation.duration=0.2" for a quick look
+set -euo pipefail
+cd "$(dirname "$0")/.."
+CAPDYN=${CAPDYN:-build/capdyn}
+OUT=${FIGURES_DIR:-figures}
+read -r -a RUN_ARGS <<< "${CAPDYN_RUN_ARGS:-}"
+if [ ! -x "$CAPDYN" ]; then echo "figures.sh: $CAPDYN not found; run 'make' first" >&2; exit 1; fi
+if ! command -v gnuplot > /dev/null; then echo "figures.sh: gnuplot not found; run 'make deps'" >&2; exit 1; fi
+mkdir -p "$OUT/data"
+D="$OUT/data"
+
+run() { # name scenario
+    echo "== $1: capdyn run $2"
+    "$CAPDYN" run "$2" -o "$D/$1.h5" --quiet ${RUN_ARGS[@]+"${RUN_ARGS[@]}"}
+    "$CAPDYN" export "$D/$1.h5" contacts --active > "$D/$1_contacts.dat"
+    "$CAPDYN" export "$D/$1.h5" events > "$D/$1_events.dat"
+    "$CAPDYN" export "$D/$1.h5" diagnostics > "$D/$1_diagnostics.dat"
+}
+
+# ---- Fig. 3: compliant mechanism hitting a rigid wall -----------------------
+run fig3 scenarios/paper_fig3_impact.toml
+for ext in png svg; do
+    gnuplot -c plots/force_profile.gp "$D/fig3_contacts.dat" "$D/fig3_events.dat" "$OUT/fig3_force.$ext" \
+        "Fig. 3: impact force of a compliant mechanism on a rigid wall"
+    gnuplot -c plots/force_profile.gp "$D/fig3_contacts.dat" "$D/fig3_events.dat" "$OUT/fig3_force_first_strike.$ext" \
+        "Fig. 3: the first strike (first 30 ms)" 0.03
+    gnuplot -c plots/diagnostics.gp "$D/fig3_diagnostics.dat" "$OUT/fig3_diagnostics.$ext" "Fig. 3: energy, momentum, step size"
+done
+
+# ---- Fig. 5: envelope grasp of a free cylinder --------------------------------
+run fig5 scenarios/paper_fig5_envelope_grasp.toml
+"$CAPDYN" export "$D/fig5.h5" outline --at 0,0.04,0.08,end > "$D/fig5_outline.dat"
+"$CAPDYN" export "$D/fig5.h5" checkpoints --at 0,0.04,0.08,end > "$D/fig5_checkpoints.dat"
+"$CAPDYN" export "$D/fig5.h5" outline --frames 120 > "$D/fig5_outline_anim.dat"
+"$CAPDYN" export "$D/fig5.h5" checkpoints --frames 120 > "$D/fig5_checkpoints_anim.dat"
+for ext in png svg; do
+    gnuplot -c plots/force_profile.gp "$D/fig5_contacts.dat" "$D/fig5_events.dat" "$OUT/fig5_force.$ext" \
+        "Fig. 5: contact forces of the envelope grasp"
+    gnuplot -c plots/force_profile.gp "$D/fig5_contacts.dat" "$D/fig5_events.dat" "$OUT/fig5_force_closing.$ext" \
+        "Fig. 5: closing on the cylinder (first 0.3 s)" 0.3
+    gnuplot -c plots/snapshots.gp "$D/fig5_outline.dat" "$D/fig5_checkpoints.dat" "$OUT/fig5_snapshots.$ext" \
+        "Fig. 5: envelope grasp (grey open, green stick, red slip)" 4
+    gnuplot -c plots/diagnostics.gp "$D/fig5_diagnostics.dat" "$OUT/fig5_diagnostics.$ext" "Fig. 5: energy, momentum, step size"
+done
+gnuplot -c plots/animation.gp "$D/fig5_outline_anim.dat" "$D/fig5_checkpoints_anim.dat" "$OUT/fig5_grasp.gif" "Fig. 5 envelope grasp" 4
+
+echo "figures written to $OUT/:"
+ls -1 "$OUT" | grep -v '^data$' | sed 's/^/  /'
+echo "(results and exported columns in $D/)"

@@ -1,0 +1,135 @@
+/* capdyn: the command-line front end (docs/cli.md).
+ *
+ *   capdyn run SCENARIO.toml [-o results.h5] [--set k=v ...] [--quiet]
+ *   capdyn check SCENARIO.toml [--set k=v ...]
+ *   capdyn info results.h5
+ *   capdyn export results.h5 WHAT [options]
+ *
+ * Only this program turns GSL's abort-on-error handler off; the library
+ * reports errors as values. Messages: one line on stderr starting with
+ * "capdyn: error: "; exit 2 for a bad command line, 1 for a runtime error,
+ * 130 when stopped by a signal. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+
+#include <gsl/gsl_errno.h>
+#include <errno.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+static const char *top_help =
+    "usage: capdyn COMMAND [ARGS...]\n"
+    "       capdyn --help | --version\n"
+    "\n"
+    "Contact dynamics of free-flying space robots (Yoshida, Nakanishi & Irobe).\n"
+    "\n"
+    "commands:\n"
+    "  run SCENARIO.toml [-o FILE.h5] [--set KEY=VALUE ...] [--quiet]\n"
+    "                     simulate a scenario, write an HDF5 results file\n"
+    "  check SCENARIO.toml [--set KEY=VALUE ...]\n"
+    "                     validate a scenario without running it\n"
+    "  info RESULTS.h5    summary of a results file\n"
+    "  export RESULTS.h5 WHAT [options]\n"
+    "                     columns of text for gnuplot (time, system NAME, contacts,\n"
+    "                     slot N, slots, events, diagnostics, outline, checkpoints)\n"
+    "\n"
+    "'capdyn COMMAND --help' describes a command; docs/cli.md is the manual.\n"
+    "exit status: 0 success, 1 runtime error, 2 bad command line, 130 interrupted.\n";
+
+void cli_error(const char *fmt, ...)
+{
+    va_list ap;
+    fputs("capdyn: error: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    fputc('\n', stderr);
+}
+
+int cli_usage(const char *cmd, const char *fmt, ...)
+{
+    va_list ap;
+    fputs("capdyn: error: ", stderr);
+    va_start(ap, fmt);
+    vfprintf(stderr, fmt, ap);
+    va_end(ap);
+    if (cmd) fprintf(stderr, " (see 'capdyn %s --help')\n", cmd);
+    else fputs(" (see 'capdyn --help')\n", stderr);
+    return CLI_USAGE;
+}
+
+int cli_number(const char *s, double *v)
+{
+    char *end;
+    double x;
+    if (!s || !*s) return -1;
+    errno = 0;
+    x = strtod(s, &end);
+    if (*end || errno || !isfinite(x)) return -1;
+    *v = x;
+    return 0;
+}
+
+int cli_count(const char *s, long *v)
+{
+    char *end;
+    long x;
+    if (!s || !*s) return -1;
+    errno = 0;
+    x = strtol(s, &end, 10);
+    if (*end || errno || x < 0) return -1;
+    *v = x;
+    return 0;
+}
+
+double cli_wall(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+int main(int argc, char **argv)
+{
+    const char *cmd;
+    /* GSL's default handler aborts the process; errors come back as values */
+    gsl_set_error_handler_off();
+    if (argc < 2) {
+        fputs(top_help, stderr);
+        return CLI_USAGE;
+    }
+    cmd = argv[1];
+    if (!strcmp(cmd, "--help") || !strcmp(cmd, "-h")) {
+        fputs(top_help, stdout);
+        return CLI_OK;
+    }
+    if (!strcmp(cmd, "help")) {
+        /* "capdyn help run" = "capdyn run --help" */
+        static char help_opt[] = "--help";
+        char *hv[2];
+        if (argc < 3) {
+            fputs(top_help, stdout);
+            return CLI_OK;
+        }
+        hv[0] = argv[2];
+        hv[1] = help_opt;
+        if (!strcmp(argv[2], "run")) return cmd_run(2, hv);
+        if (!strcmp(argv[2], "check")) return cmd_check(2, hv);
+        if (!strcmp(argv[2], "info")) return cmd_info(2, hv);
+        if (!strcmp(argv[2], "export")) return cmd_export(2, hv);
+        return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export)", argv[2]);
+    }
+    if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
+        printf("capdyn %s\n", cd_version());
+        return CLI_OK;
+    }
+    if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
+    if (!strcmp(cmd, "check")) return cmd_check(argc - 1, argv + 1);
+    if (!strcmp(cmd, "info")) return cmd_info(argc - 1, argv + 1);
+    if (!strcmp(cmd, "export")) return cmd_export(argc - 1, argv + 1);
+    if (cmd[0] == '-') return cli_usage(NULL, "unknown option '%s'", cmd);
+    return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export)", cmd);
+}

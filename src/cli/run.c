@@ -1,0 +1,336 @@
+/* capdyn run / capdyn check.
+ *
+ * run: load -> create the results file (fails before any simulation if the
+ * path is not writable) -> sample every output_dt by cd_sim_advance to the
+ * next sample time -> close the file with the run status -> summary.
+ * The step callback (after every accepted step and event) draws the
+ * progress bar, tracks the largest contact forces of every step, and
+ * stops the run when SIGINT/SIGTERM set the flag. */
+#define _POSIX_C_SOURCE 200809L
+#include "cli.h"
+
+#include <math.h>
+#include <signal.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+static const char *run_help =
+    "usage: capdyn run SCENARIO.toml [-o FILE.h5] [--set KEY=VALUE ...] [--quiet]\n"
+    "\n"
+    "Simulates the scenario and writes every output_dt a sample of the state,\n"
+    "contact forces and diagnostics to an HDF5 file (docs/results-format.md).\n"
+    "\n"
+    "options:\n"
+    "  -o, --output FILE   results file (default: the scenario's base name with\n"
+    "                      .h5, in the current directory); created or truncated\n"
+    "                      before the run, which does not start if it cannot be\n"
+    "  --set KEY=VALUE     override a scenario value (TOML syntax), repeatable,\n"
+    "                      e.g. --set simulation.duration=0.5\n"
+    "  -q, --quiet         no progress bar and no summary (errors still shown)\n"
+    "  -h, --help          this text\n"
+    "\n"
+    "A progress bar is drawn on stderr when it is a terminal. Ctrl-C (SIGINT) or\n"
+    "SIGTERM stops the run cleanly: the file is closed with what was computed and\n"
+    "the exit status is 130. On an integrator failure (stalled step size, NaN,\n"
+    "step budget) the file keeps everything up to the failure; exit status 1.\n";
+
+static const char *check_help =
+    "usage: capdyn check SCENARIO.toml [--set KEY=VALUE ...]\n"
+    "\n"
+    "Loads and validates the scenario (with its includes and overrides) and builds\n"
+    "the model, without simulating. Prints one line: systems, bodies, joints,\n"
+    "check points, shapes, contact slots and state size. Exit status 1 (and the\n"
+    "loader's FILE:LINE:COLUMN message) if the scenario is invalid.\n";
+
+static volatile sig_atomic_t g_signal = 0;
+static void on_signal(int sig) { g_signal = sig; }
+
+typedef struct {
+    int progress;          /* draw the bar */
+    double t_end, wall0, last_draw;
+    double *fn_max, *ft_max;
+    int drawn;
+} run_ctx;
+
+static void draw_progress(run_ctx *c, const cd_data *d, double now)
+{
+    char bar[31];
+    double f = c->t_end > 0 ? d->t / c->t_end : 1.0;
+    int i, nfull;
+    if (f > 1) f = 1;
+    if (f < 0) f = 0;
+    nfull = (int)(f * 30.0);
+    for (i = 0; i < 30; i++) bar[i] = i < nfull ? '#' : '.';
+    bar[30] = 0;
+    fprintf(stderr, "\r[%s] %5.1f%%  t = %-10.6g s of %g s  wall %7.1f s  events %ld ", bar, 100.0 * f, d->t,
+            c->t_end, now - c->wall0, d->ev_count);
+    fflush(stderr);
+    c->drawn = 1;
+    c->last_draw = now;
+}
+
+static void clear_progress(run_ctx *c)
+{
+    if (c->drawn) {
+        fputs("\r\033[K", stderr);
+        fflush(stderr);
+        c->drawn = 0;
+    }
+}
+
+static int step_cb(const cd_model *m, const cd_data *d, void *user)
+{
+    run_ctx *c = (run_ctx *)user;
+    int k;
+    if (g_signal) return 1;
+    for (k = 0; k < m->nslot; k++) {
+        const double *ft = d->slot_ft + 3 * k;
+        double a = sqrt(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]);
+        if (d->slot_fn[k] > c->fn_max[k]) c->fn_max[k] = d->slot_fn[k];
+        if (a > c->ft_max[k]) c->ft_max[k] = a;
+    }
+    if (c->progress) {
+        double now = cli_wall();
+        if (now - c->last_draw >= 0.1) draw_progress(c, d, now);
+    }
+    return 0;
+}
+
+/* Options shared by run and check. Returns -1 when done (help printed),
+ * CLI_USAGE on an error, 0 to go on. */
+typedef struct {
+    const char *scenario, *output;
+    const char **sets;
+    int nsets, quiet;
+} run_opts;
+
+static int parse_opts(const char *cmd, int argc, char **argv, run_opts *o, int is_run)
+{
+    int i, only_args = 0;
+    memset(o, 0, sizeof *o);
+    o->sets = calloc((size_t)argc + 1, sizeof *o->sets);
+    if (!o->sets) {
+        cli_error("out of memory");
+        return CLI_FAIL;
+    }
+    for (i = 1; i < argc; i++) {
+        const char *a = argv[i];
+        if (!only_args && a[0] == '-' && a[1]) {
+            if (!strcmp(a, "--")) { only_args = 1; continue; }
+            if (!strcmp(a, "-h") || !strcmp(a, "--help")) {
+                fputs(is_run ? run_help : check_help, stdout);
+                return -1;
+            }
+            if (!strcmp(a, "--set") || !strncmp(a, "--set=", 6)) {
+                const char *v = a[5] == '=' ? a + 6 : (i + 1 < argc ? argv[++i] : NULL);
+                if (!v) return cli_usage(cmd, "--set needs KEY=VALUE");
+                if (!strchr(v, '=') || v[0] == '=') return cli_usage(cmd, "--set expects KEY=VALUE, got '%s'", v);
+                o->sets[o->nsets++] = v;
+                continue;
+            }
+            if (is_run && (!strcmp(a, "-o") || !strcmp(a, "--output") || !strncmp(a, "--output=", 9))) {
+                const char *v = a[1] == '-' && a[8] == '=' ? a + 9 : (i + 1 < argc ? argv[++i] : NULL);
+                if (!v || !*v) return cli_usage(cmd, "%s needs a file name", a);
+                o->output = v;
+                continue;
+            }
+            if (is_run && (!strcmp(a, "-q") || !strcmp(a, "--quiet"))) {
+                o->quiet = 1;
+                continue;
+            }
+            return cli_usage(cmd, "unknown option '%s'", a);
+        }
+        if (o->scenario) return cli_usage(cmd, "unexpected argument '%s' (one scenario file per run)", a);
+        o->scenario = a;
+    }
+    if (!o->scenario) return cli_usage(cmd, "missing the scenario file");
+    return 0;
+}
+
+static void default_output(const char *scenario, char *out, size_t len)
+{
+    const char *b = strrchr(scenario, '/');
+    size_t n;
+    b = b ? b + 1 : scenario;
+    n = strlen(b);
+    if (n > 5 && strcmp(b + n - 5, ".toml") == 0) n -= 5;
+    snprintf(out, len, "%.*s.h5", (int)n, b);
+}
+
+int cmd_check(int argc, char **argv)
+{
+    run_opts o;
+    cd_scenario *sc;
+    cd_error err;
+    const cd_model *m;
+    int rc = parse_opts("check", argc, argv, &o, 0), njoint = 0, s;
+    if (rc) {
+        free(o.sets);
+        return rc < 0 ? CLI_OK : rc;
+    }
+    sc = cd_scenario_load(o.scenario, o.sets, o.nsets, &err);
+    free(o.sets);
+    if (!sc) {
+        cli_error("%s", err.msg);
+        return CLI_FAIL;
+    }
+    m = sc->model;
+    for (s = 0; s < m->nsys; s++) njoint += m->sys_nbody[s] - 1;
+    printf("%s: OK: '%s': %d system%s, %d bodies (%d joints), %d check points, %d shapes, %d contact slots, "
+           "state size %d; %g s, output every %g s\n",
+           o.scenario, sc->title ? sc->title : "", m->nsys, m->nsys == 1 ? "" : "s", m->nbody, njoint, m->ncp,
+           m->nshape, m->nslot, m->ny, sc->duration, sc->output_dt);
+    cd_scenario_free(sc);
+    return CLI_OK;
+}
+
+int cmd_run(int argc, char **argv)
+{
+    run_opts o;
+    cd_scenario *sc;
+    const cd_model *m;
+    cd_data *d = NULL;
+    cd_h5_writer *w;
+    cd_error err, werr;
+    cd_status st = CD_OK, cst;
+    run_ctx ctx;
+    char outbuf[1024], msg[768];
+    const char *out;
+    long i, nout;
+    double last_flush, t_last_sample;
+    int rc = parse_opts("run", argc, argv, &o, 1), exitc;
+    struct sigaction sa, old_int, old_term;
+
+    if (rc) {
+        free(o.sets);
+        return rc < 0 ? CLI_OK : rc;
+    }
+    if (o.output) out = o.output;
+    else {
+        default_output(o.scenario, outbuf, sizeof outbuf);
+        out = outbuf;
+    }
+    sc = cd_scenario_load(o.scenario, o.sets, o.nsets, &err);
+    free(o.sets);
+    if (!sc) {
+        cli_error("%s", err.msg);
+        return CLI_FAIL;
+    }
+    m = sc->model;
+    if (!(sc->duration > 0) || !(sc->output_dt > 0)) {
+        cli_error("%s: duration and output_dt must be positive", o.scenario);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    d = cd_data_create(m, sc->event_capacity, &err);
+    if (!d) {
+        cli_error("%s", err.msg);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    /* the results file first: an unwritable path fails before any work */
+    w = cd_h5_create(out, m, sc, &err);
+    if (!w) {
+        cli_error("%s", err.msg);
+        cd_data_free(d);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+
+    memset(&ctx, 0, sizeof ctx);
+    ctx.fn_max = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.ft_max = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.t_end = sc->duration;
+    ctx.wall0 = cli_wall();
+    ctx.last_draw = -1e300;
+    ctx.progress = !o.quiet && isatty(STDERR_FILENO);
+    if (!ctx.fn_max || !ctx.ft_max) {
+        cli_error("out of memory");
+        cd_h5_close(w, m, d, CD_ENOMEM, "out of memory", NULL);
+        free(ctx.fn_max);
+        free(ctx.ft_max);
+        cd_data_free(d);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    /* the state at t = 0 counts for the maxima too (contacts closed at start) */
+    (void)step_cb(m, d, &ctx);
+
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+
+    err.status = werr.status = CD_OK;
+    err.msg[0] = werr.msg[0] = 0;
+    st = cd_h5_append(w, m, d, &werr);
+    t_last_sample = d->t;
+    last_flush = cli_wall();
+    /* samples at k output_dt; the last one exactly at the duration */
+    nout = (long)ceil(sc->duration / sc->output_dt - 1e-9);
+    for (i = 1; st == CD_OK && i <= nout; i++) {
+        double tn = i == nout ? sc->duration : (double)i * sc->output_dt;
+        if (tn > sc->duration) tn = sc->duration;
+        st = cd_sim_advance(m, d, tn, step_cb, &ctx, &err);
+        if (st != CD_OK) break;
+        st = cd_h5_append(w, m, d, &werr);
+        if (st != CD_OK) { err = werr; break; }
+        t_last_sample = d->t;
+        if (cli_wall() - last_flush >= sc->flush_every) {
+            st = cd_h5_flush(w, &werr);
+            if (st != CD_OK) { err = werr; break; }
+            last_flush = cli_wall();
+        }
+        if (g_signal) { st = CD_EINTERRUPT; break; }
+    }
+    if (st != CD_OK && err.msg[0] == 0) snprintf(err.msg, sizeof err.msg, "%s at t = %.9g s", cd_status_string(st), d->t);
+    clear_progress(&ctx);
+
+    /* keep the last good state of a failed or interrupted run */
+    if (st != CD_OK && st != CD_EIO && d->t > t_last_sample) (void)cd_h5_append(w, m, d, &werr);
+    if (st == CD_EINTERRUPT && g_signal)
+        snprintf(msg, sizeof msg, "stopped by %s at t = %.9g s", g_signal == SIGINT ? "SIGINT" : "SIGTERM", d->t);
+    else if (st == CD_OK)
+        snprintf(msg, sizeof msg, "finished at t = %.9g s", d->t);
+    else
+        snprintf(msg, sizeof msg, "%s", err.msg);
+    cst = cd_h5_close(w, m, d, st, msg, &werr);
+    ctx.wall0 = cli_wall() - ctx.wall0;
+    sigaction(SIGINT, &old_int, NULL);
+    sigaction(SIGTERM, &old_term, NULL);
+
+    if (st == CD_OK) exitc = CLI_OK;
+    else if (st == CD_EINTERRUPT && g_signal) exitc = CLI_INTERRUPT;
+    else exitc = CLI_FAIL;
+
+    if (cst != CD_OK) {
+        cli_error("closing '%s': %s", out, werr.msg);
+        if (exitc == CLI_OK) exitc = CLI_FAIL;
+    } else if (!o.quiet) {
+        cd_error rerr;
+        cd_h5r *r = cd_h5r_open(out, &rerr);
+        if (r) {
+            cli_run_extra x;
+            x.wall = ctx.wall0;
+            x.fn_max = ctx.fn_max;
+            x.ft_max = ctx.ft_max;
+            cli_report(stdout, r, out, &x);
+            cd_h5r_close(r);
+        } else {
+            cli_error("reading back '%s': %s", out, rerr.msg);
+        }
+    }
+    fflush(stdout);
+    if (exitc == CLI_INTERRUPT)
+        fprintf(stderr, "capdyn: %s; results up to t = %.9g s kept in '%s'\n", msg, d->t, out);
+    else if (exitc != CLI_OK && cst == CD_OK)
+        cli_error("run failed (%s): %s; results up to t = %.9g s kept in '%s'", cd_status_string(st), msg, d->t,
+                  out);
+    free(ctx.fn_max);
+    free(ctx.ft_max);
+    cd_data_free(d);
+    cd_scenario_free(sc);
+    return exitc;
+}

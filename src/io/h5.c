@@ -1,0 +1,1062 @@
+/* HDF5 results writer (include/capdyn/io.h; layout in docs/results-format.md).
+ *
+ * Crash safety. HDF5 1.10 has no journal: a file whose writer dies between
+ * two H5Fflush calls may be unreadable (measured here: 8/8 files killed with
+ * SIGKILL without flushing were unreadable, 8/8 readable with H5Fflush). So
+ * the writer touches the file ONLY inside a commit: samples and events are
+ * buffered in memory by cd_h5_append, and a commit (cd_h5_flush, or a full
+ * buffer) writes every pending row, flushes, then writes the counters
+ * /committed_events and /committed_samples (the latter last) and flushes
+ * again. Between commits HDF5 makes no call that writes, so a killed run
+ * leaves the file as of its last commit; a kill inside a commit can leave
+ * datasets longer than the counter says, which is why readers trust only
+ * committed_samples rows. HDF5 is synchronous (no background writer), and a
+ * process killed by a signal keeps what it already passed to write(2).
+ *
+ * The file uses the default (earliest) format: superblock version 0 has no
+ * "file open for writing" flag, so a file left by a killed writer opens
+ * without h5clear.
+ *
+ * HDF5 prints its error stack by default; every public call here silences
+ * the automatic printing for its own duration (saved and restored), so the
+ * library never prints. */
+#define _POSIX_C_SOURCE 200809L
+#include "capdyn/io.h"
+#include "../math/cd_math.h"
+
+#include <hdf5.h>
+#include <errno.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <time.h>
+#include <unistd.h>
+
+#define CD_H5_FORMAT_VERSION 1
+#define CD_H5_NAMELEN 64   /* fixed-length name fields in the static tables */
+#define CD_H5_ATTR_MAX 60000 /* larger texts go to a dataset (object header limit 64 KiB) */
+
+enum { T_F64 = 0, T_I64, T_I8 };
+
+/* One time series: a dataset (n x tail...) extended on every commit, and a
+ * buffer of rows not yet written. */
+typedef struct {
+    hid_t dset;
+    int rank;             /* 1 + number of tail dimensions */
+    hsize_t tail[2];
+    size_t rowlen;        /* elements per row */
+    int type;             /* T_F64, T_I64, T_I8 */
+    unsigned char *buf;   /* cap_rows x rowlen elements */
+} h5_series;
+
+/* series indices of one system */
+typedef struct {
+    int pos, quat, vel, angvel, q, qd, body_x, body_c, body_quat;
+} sys_series;
+
+struct cd_h5_writer {
+    hid_t file;
+    int nsys, nbody, nslot, ny;   /* of the model the file was created for */
+    h5_series *ser;
+    int nser, capser;
+    int cap_rows, nbuf;           /* row buffer capacity and rows pending */
+    long long nwritten;           /* rows on disk (= committed after a commit) */
+    /* series indices */
+    int s_time;
+    sys_series *s_sys;
+    int s_fn, s_ft, s_x, s_xdot, s_point, s_normal, s_vt, s_mode;
+    int s_ke, s_pe, s_P, s_Lc, s_Lo, s_com, s_h, s_nrhs, s_nsteps, s_nrej, s_nev, s_wall;
+    /* events */
+    hid_t ev_dset, ev_mtype, ev_ftype, kind_enum, mode_enum;
+    cd_event *evbuf;
+    long ev_nbuf, ev_capbuf;
+    long long ev_written;
+    long ev_next;                 /* total-count index of the next event to take from d */
+    long long ev_lost;
+    struct timespec wall0;
+    int failed;                   /* a write failed: later commits are refused */
+};
+
+/* ---- error plumbing --------------------------------------------------------- */
+typedef struct { H5E_auto2_t func; void *data; } h5_quiet;
+
+static void quiet_begin(h5_quiet *q)
+{
+    (void)H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
+    (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+static void quiet_end(const h5_quiet *q) { (void)H5Eset_auto2(H5E_DEFAULT, q->func, q->data); }
+
+static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
+{
+    va_list ap;
+    if (!err) return;
+    err->status = st;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+}
+
+/* ---- attributes ---------------------------------------------------------------- */
+static hid_t str_type(size_t len)
+{
+    hid_t t = H5Tcopy(H5T_C_S1);
+    if (t < 0) return t;
+    H5Tset_size(t, len > 0 ? len : 1);
+    H5Tset_strpad(t, H5T_STR_NULLTERM);
+    H5Tset_cset(t, H5T_CSET_UTF8); /* titles and names may be UTF-8; ASCII is a subset */
+    return t;
+}
+
+static int attr_write(hid_t obj, const char *name, hid_t ftype, hid_t mtype, int n, const void *v)
+{
+    hid_t sp, a;
+    hsize_t dim = (hsize_t)n;
+    herr_t r;
+    if (H5Aexists(obj, name) > 0) {
+        a = H5Aopen(obj, name, H5P_DEFAULT);
+        /* a string of another length needs a new attribute */
+        if (a >= 0) {
+            hid_t t = H5Aget_type(a);
+            hid_t s = H5Aget_space(a);
+            int same = H5Tget_size(t) == H5Tget_size(ftype) &&
+                       H5Sget_simple_extent_npoints(s) == (hssize_t)(n > 0 ? n : 1);
+            H5Tclose(t);
+            H5Sclose(s);
+            if (same) {
+                r = H5Awrite(a, mtype, v);
+                H5Aclose(a);
+                return r < 0 ? -1 : 0;
+            }
+            H5Aclose(a);
+        }
+        if (H5Adelete(obj, name) < 0) return -1;
+    }
+    sp = n > 0 ? H5Screate_simple(1, &dim, NULL) : H5Screate(H5S_SCALAR);
+    if (sp < 0) return -1;
+    a = H5Acreate2(obj, name, ftype, sp, H5P_DEFAULT, H5P_DEFAULT);
+    H5Sclose(sp);
+    if (a < 0) return -1;
+    r = H5Awrite(a, mtype, v);
+    H5Aclose(a);
+    return r < 0 ? -1 : 0;
+}
+
+static int attr_str(hid_t obj, const char *name, const char *s)
+{
+    hid_t t;
+    int r;
+    if (!s) s = "";
+    t = str_type(strlen(s) + 1);
+    if (t < 0) return -1;
+    r = attr_write(obj, name, t, t, 0, s);
+    H5Tclose(t);
+    return r;
+}
+static int attr_i64(hid_t obj, const char *name, long long v)
+{ return attr_write(obj, name, H5T_STD_I64LE, H5T_NATIVE_LLONG, 0, &v); }
+static int attr_int(hid_t obj, const char *name, int v)
+{ return attr_write(obj, name, H5T_STD_I32LE, H5T_NATIVE_INT, 0, &v); }
+static int attr_f64(hid_t obj, const char *name, double v)
+{ return attr_write(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, 0, &v); }
+static int attr_f64v(hid_t obj, const char *name, int n, const double *v)
+{ return attr_write(obj, name, H5T_IEEE_F64LE, H5T_NATIVE_DOUBLE, n, v); }
+
+/* An array of n strings, each at most len-1 characters. */
+static int attr_strv(hid_t obj, const char *name, int n, const char *const *v, size_t len)
+{
+    char *flat = calloc((size_t)n, len);
+    hid_t t;
+    int i, r;
+    if (!flat) return -1;
+    for (i = 0; i < n; i++) snprintf(flat + (size_t)i * len, len, "%s", v[i]);
+    t = str_type(len);
+    r = attr_write(obj, name, t, t, n, flat);
+    H5Tclose(t);
+    free(flat);
+    return r;
+}
+
+/* A text that may exceed the attribute size limit: an attribute when it fits,
+ * else a 1-D char dataset of that name at the root and an attribute pointing to it. */
+static int attr_text(hid_t file, const char *name, const char *s)
+{
+    size_t n;
+    hid_t sp, ds;
+    hsize_t dim;
+    char note[160];
+    herr_t r;
+    if (!s) s = "";
+    n = strlen(s);
+    if (n < CD_H5_ATTR_MAX) return attr_str(file, name, s);
+    dim = (hsize_t)n;
+    sp = H5Screate_simple(1, &dim, NULL);
+    if (sp < 0) return -1;
+    ds = H5Dcreate2(file, name, H5T_NATIVE_CHAR, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    H5Sclose(sp);
+    if (ds < 0) return -1;
+    r = H5Dwrite(ds, H5T_NATIVE_CHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, s);
+    H5Dclose(ds);
+    if (r < 0) return -1;
+    snprintf(note, sizeof note, "@dataset /%s (%lu bytes)", name, (unsigned long)n);
+    return attr_str(file, name, note);
+}
+
+/* ---- static tables ------------------------------------------------------------ */
+typedef struct {
+    int id, system, parent, joint_type, dof;
+    char name[CD_H5_NAMELEN], full_name[2 * CD_H5_NAMELEN];
+    double mass, com[3], inertia[9], joint_pos[3], joint_rot[9], axis[3];
+} body_row;
+
+typedef struct {
+    int id, body;
+    double pos[3], radius;
+} cp_row;
+
+typedef struct {
+    int id, body, type;
+    char type_name[16];
+    double pos[3], rot[9], size[3];
+    int vert_adr, vert_num;
+} shape_row;
+
+typedef struct {
+    int slot, checkpoint, shape, law, body_a, body_b;
+    char body_a_name[2 * CD_H5_NAMELEN], body_b_name[2 * CD_H5_NAMELEN], shape_type[16];
+    double cp_pos[3], cp_radius;
+    double K, D, p, q, Kt, Dt, mu_s, mu_k;
+} slot_row;
+
+static hid_t arr_type(hid_t base, hsize_t n) { return H5Tarray_create2(base, 1, &n); }
+
+/* compound member helpers: closes the member type after insertion */
+static void ins(hid_t ct, const char *name, size_t off, hid_t t) { H5Tinsert(ct, name, off, t); }
+static void ins_arr(hid_t ct, const char *name, size_t off, hsize_t n)
+{
+    hid_t a = arr_type(H5T_NATIVE_DOUBLE, n);
+    H5Tinsert(ct, name, off, a);
+    H5Tclose(a);
+}
+static void ins_str(hid_t ct, const char *name, size_t off, size_t len)
+{
+    hid_t s = str_type(len);
+    H5Tinsert(ct, name, off, s);
+    H5Tclose(s);
+}
+
+static int write_table(hid_t loc, const char *name, hid_t mtype, size_t n, const void *rows)
+{
+    hsize_t dim = (hsize_t)n;
+    hid_t ft = H5Tcopy(mtype), sp, ds;
+    herr_t r = 0;
+    if (ft < 0) return -1;
+    H5Tpack(ft);
+    sp = H5Screate_simple(1, &dim, NULL);
+    ds = sp >= 0 ? H5Dcreate2(loc, name, ft, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT) : -1;
+    if (ds >= 0 && n > 0) r = H5Dwrite(ds, mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, rows);
+    if (ds >= 0) H5Dclose(ds);
+    if (sp >= 0) H5Sclose(sp);
+    H5Tclose(ft);
+    return (ds < 0 || r < 0) ? -1 : 0;
+}
+
+static void full_name(const cd_model *m, int b, char *out, size_t len)
+{
+    int s = m->body_sys[b];
+    if (m->body_parent[b] < 0) snprintf(out, len, "%s", m->sys_name[s]);
+    else snprintf(out, len, "%s/%s", m->sys_name[s], m->body_name[b]);
+}
+
+static int write_model_tables(hid_t file, const cd_model *m)
+{
+    hid_t g = H5Gcreate2(file, "model", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT), ct;
+    int i, rc = 0;
+    body_row *br;
+    cp_row *cr;
+    shape_row *sr;
+    if (g < 0) return -1;
+    /* bodies */
+    br = calloc((size_t)(m->nbody ? m->nbody : 1), sizeof *br);
+    cr = calloc((size_t)(m->ncp ? m->ncp : 1), sizeof *cr);
+    sr = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof *sr);
+    if (!br || !cr || !sr) { rc = -1; goto out; }
+    for (i = 0; i < m->nbody; i++) {
+        body_row *r = br + i;
+        r->id = i;
+        r->system = m->body_sys[i];
+        r->parent = m->body_parent[i];
+        r->joint_type = m->body_jnt_type[i];
+        r->dof = m->body_dof[i];
+        snprintf(r->name, sizeof r->name, "%s", m->body_name[i]);
+        full_name(m, i, r->full_name, sizeof r->full_name);
+        r->mass = m->body_mass[i];
+        memcpy(r->com, m->body_com + 3 * i, sizeof r->com);
+        memcpy(r->inertia, m->body_inertia + 9 * i, sizeof r->inertia);
+        memcpy(r->joint_pos, m->body_jnt_pos + 3 * i, sizeof r->joint_pos);
+        memcpy(r->joint_rot, m->body_jnt_rot + 9 * i, sizeof r->joint_rot);
+        memcpy(r->axis, m->body_axis + 3 * i, sizeof r->axis);
+    }
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(body_row));
+    ins(ct, "id", HOFFSET(body_row, id), H5T_NATIVE_INT);
+    ins(ct, "system", HOFFSET(body_row, system), H5T_NATIVE_INT);
+    ins(ct, "parent", HOFFSET(body_row, parent), H5T_NATIVE_INT);
+    ins(ct, "joint_type", HOFFSET(body_row, joint_type), H5T_NATIVE_INT);
+    ins(ct, "dof", HOFFSET(body_row, dof), H5T_NATIVE_INT);
+    ins_str(ct, "name", HOFFSET(body_row, name), sizeof br->name);
+    ins_str(ct, "full_name", HOFFSET(body_row, full_name), sizeof br->full_name);
+    ins(ct, "mass", HOFFSET(body_row, mass), H5T_NATIVE_DOUBLE);
+    ins_arr(ct, "com", HOFFSET(body_row, com), 3);
+    ins_arr(ct, "inertia", HOFFSET(body_row, inertia), 9);
+    ins_arr(ct, "joint_pos", HOFFSET(body_row, joint_pos), 3);
+    ins_arr(ct, "joint_rot", HOFFSET(body_row, joint_rot), 9);
+    ins_arr(ct, "axis", HOFFSET(body_row, axis), 3);
+    if (write_table(g, "bodies", ct, (size_t)m->nbody, br) < 0) rc = -1;
+    H5Tclose(ct);
+    /* check points */
+    for (i = 0; i < m->ncp; i++) {
+        cr[i].id = i;
+        cr[i].body = m->cp_body[i];
+        memcpy(cr[i].pos, m->cp_pos + 3 * i, sizeof cr[i].pos);
+        cr[i].radius = m->cp_radius[i];
+    }
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cp_row));
+    ins(ct, "id", HOFFSET(cp_row, id), H5T_NATIVE_INT);
+    ins(ct, "body", HOFFSET(cp_row, body), H5T_NATIVE_INT);
+    ins_arr(ct, "pos", HOFFSET(cp_row, pos), 3);
+    ins(ct, "radius", HOFFSET(cp_row, radius), H5T_NATIVE_DOUBLE);
+    if (write_table(g, "checkpoints", ct, (size_t)m->ncp, cr) < 0) rc = -1;
+    H5Tclose(ct);
+    /* shapes */
+    for (i = 0; i < m->nshape; i++) {
+        sr[i].id = i;
+        sr[i].body = m->shape_body[i];
+        sr[i].type = m->shape_type[i];
+        snprintf(sr[i].type_name, sizeof sr[i].type_name, "%s", cd_shape_type_name((cd_shape_type)m->shape_type[i]));
+        memcpy(sr[i].pos, m->shape_pos + 3 * i, sizeof sr[i].pos);
+        memcpy(sr[i].rot, m->shape_rot + 9 * i, sizeof sr[i].rot);
+        memcpy(sr[i].size, m->shape_size + 3 * i, sizeof sr[i].size);
+        sr[i].vert_adr = m->shape_vert_adr[i];
+        sr[i].vert_num = m->shape_vert_num[i];
+    }
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(shape_row));
+    ins(ct, "id", HOFFSET(shape_row, id), H5T_NATIVE_INT);
+    ins(ct, "body", HOFFSET(shape_row, body), H5T_NATIVE_INT);
+    ins(ct, "type", HOFFSET(shape_row, type), H5T_NATIVE_INT);
+    ins_str(ct, "type_name", HOFFSET(shape_row, type_name), sizeof sr->type_name);
+    ins_arr(ct, "pos", HOFFSET(shape_row, pos), 3);
+    ins_arr(ct, "rot", HOFFSET(shape_row, rot), 9);
+    ins_arr(ct, "size", HOFFSET(shape_row, size), 3);
+    ins(ct, "vert_adr", HOFFSET(shape_row, vert_adr), H5T_NATIVE_INT);
+    ins(ct, "vert_num", HOFFSET(shape_row, vert_num), H5T_NATIVE_INT);
+    if (write_table(g, "shapes", ct, (size_t)m->nshape, sr) < 0) rc = -1;
+    H5Tclose(ct);
+    /* convex-hull vertices (nvert x 3) */
+    {
+        hsize_t dims[2] = {(hsize_t)m->nvert, 3};
+        hid_t sp = H5Screate_simple(2, dims, NULL);
+        hid_t ds = sp >= 0 ? H5Dcreate2(g, "vertices", H5T_IEEE_F64LE, sp, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT) : -1;
+        if (ds < 0 || (m->nvert > 0 && H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, m->vert) < 0))
+            rc = -1;
+        if (ds >= 0) H5Dclose(ds);
+        if (sp >= 0) H5Sclose(sp);
+    }
+    if (attr_f64v(g, "gravity", 3, m->gravity) < 0) rc = -1;
+out:
+    free(br);
+    free(cr);
+    free(sr);
+    H5Gclose(g);
+    return rc;
+}
+
+static int write_slot_table(hid_t g, const cd_model *m)
+{
+    slot_row *r = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof *r);
+    hid_t ct;
+    int k, rc;
+    if (!r) return -1;
+    for (k = 0; k < m->nslot; k++) {
+        int cp = m->slot_cp[k], sh = m->slot_shape[k];
+        const cd_contact_law *L = &m->law[m->slot_law[k]];
+        r[k].slot = k;
+        r[k].checkpoint = cp;
+        r[k].shape = sh;
+        r[k].law = m->slot_law[k];
+        r[k].body_a = m->cp_body[cp];
+        r[k].body_b = m->shape_body[sh];
+        full_name(m, r[k].body_a, r[k].body_a_name, sizeof r[k].body_a_name);
+        full_name(m, r[k].body_b, r[k].body_b_name, sizeof r[k].body_b_name);
+        snprintf(r[k].shape_type, sizeof r[k].shape_type, "%s", cd_shape_type_name((cd_shape_type)m->shape_type[sh]));
+        memcpy(r[k].cp_pos, m->cp_pos + 3 * cp, sizeof r[k].cp_pos);
+        r[k].cp_radius = m->cp_radius[cp];
+        r[k].K = L->K; r[k].D = L->D; r[k].p = L->p; r[k].q = L->q;
+        r[k].Kt = L->Kt; r[k].Dt = L->Dt; r[k].mu_s = L->mu_s; r[k].mu_k = L->mu_k;
+    }
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(slot_row));
+    ins(ct, "slot", HOFFSET(slot_row, slot), H5T_NATIVE_INT);
+    ins(ct, "checkpoint", HOFFSET(slot_row, checkpoint), H5T_NATIVE_INT);
+    ins(ct, "shape", HOFFSET(slot_row, shape), H5T_NATIVE_INT);
+    ins(ct, "law", HOFFSET(slot_row, law), H5T_NATIVE_INT);
+    ins(ct, "body_a", HOFFSET(slot_row, body_a), H5T_NATIVE_INT);
+    ins(ct, "body_b", HOFFSET(slot_row, body_b), H5T_NATIVE_INT);
+    ins_str(ct, "body_a_name", HOFFSET(slot_row, body_a_name), sizeof r->body_a_name);
+    ins_str(ct, "body_b_name", HOFFSET(slot_row, body_b_name), sizeof r->body_b_name);
+    ins_str(ct, "shape_type", HOFFSET(slot_row, shape_type), sizeof r->shape_type);
+    ins_arr(ct, "cp_pos", HOFFSET(slot_row, cp_pos), 3);
+    ins(ct, "cp_radius", HOFFSET(slot_row, cp_radius), H5T_NATIVE_DOUBLE);
+    ins(ct, "K", HOFFSET(slot_row, K), H5T_NATIVE_DOUBLE);
+    ins(ct, "D", HOFFSET(slot_row, D), H5T_NATIVE_DOUBLE);
+    ins(ct, "p", HOFFSET(slot_row, p), H5T_NATIVE_DOUBLE);
+    ins(ct, "q", HOFFSET(slot_row, q), H5T_NATIVE_DOUBLE);
+    ins(ct, "Kt", HOFFSET(slot_row, Kt), H5T_NATIVE_DOUBLE);
+    ins(ct, "Dt", HOFFSET(slot_row, Dt), H5T_NATIVE_DOUBLE);
+    ins(ct, "mu_s", HOFFSET(slot_row, mu_s), H5T_NATIVE_DOUBLE);
+    ins(ct, "mu_k", HOFFSET(slot_row, mu_k), H5T_NATIVE_DOUBLE);
+    rc = write_table(g, "slots", ct, (size_t)m->nslot, r);
+    H5Tclose(ct);
+    free(r);
+    return rc;
+}
+
+/* ---- time series ----------------------------------------------------------------- */
+static size_t type_size(int t) { return t == T_F64 ? sizeof(double) : t == T_I64 ? sizeof(long long) : 1; }
+static hid_t mem_type(int t) { return t == T_F64 ? H5T_NATIVE_DOUBLE : t == T_I64 ? H5T_NATIVE_LLONG : H5T_NATIVE_SCHAR; }
+static hid_t file_type(int t) { return t == T_F64 ? H5T_IEEE_F64LE : t == T_I64 ? H5T_STD_I64LE : H5T_STD_I8LE; }
+
+/* Creates an extendible (0 x tail) dataset; returns its series index or -1. */
+static int add_series(cd_h5_writer *w, hid_t loc, const char *name, int type, int ntail, hsize_t t0,
+                      hsize_t t1, const char *units, const char *desc)
+{
+    h5_series *s;
+    hsize_t dims[3] = {0, t0, t1}, maxd[3] = {H5S_UNLIMITED, t0, t1}, chunk[3];
+    hid_t sp, dcpl;
+    size_t rowbytes;
+    int rank = 1 + ntail;
+    if (w->nser == w->capser) {
+        int nc = w->capser ? 2 * w->capser : 32;
+        h5_series *ns = realloc(w->ser, (size_t)nc * sizeof *ns);
+        if (!ns) return -1;
+        w->ser = ns;
+        w->capser = nc;
+    }
+    s = w->ser + w->nser;
+    memset(s, 0, sizeof *s);
+    s->dset = -1;
+    s->rank = rank;
+    s->tail[0] = ntail > 0 ? t0 : 1;
+    s->tail[1] = ntail > 1 ? t1 : 1;
+    s->rowlen = (size_t)(s->tail[0] * s->tail[1]);
+    s->type = type;
+    rowbytes = s->rowlen * type_size(type);
+    /* chunks of about 32 KiB along time: a few hundred rows for narrow series */
+    chunk[0] = (hsize_t)(32768 / rowbytes);
+    if (chunk[0] < 16) chunk[0] = 16;
+    if (chunk[0] > 4096) chunk[0] = 4096;
+    chunk[1] = t0;
+    chunk[2] = t1;
+    sp = H5Screate_simple(rank, dims, maxd);
+    dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    if (sp < 0 || dcpl < 0) goto fail;
+    if (H5Pset_chunk(dcpl, rank, chunk) < 0) goto fail;
+    if (type != T_I8) H5Pset_shuffle(dcpl);
+    if (H5Pset_deflate(dcpl, 1) < 0) goto fail;
+    s->dset = H5Dcreate2(loc, name, file_type(type), sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+    if (s->dset < 0) goto fail;
+    if (units) attr_str(s->dset, "units", units);
+    if (desc) attr_str(s->dset, "description", desc);
+    H5Pclose(dcpl);
+    H5Sclose(sp);
+    w->nser++;
+    return w->nser - 1;
+fail:
+    if (dcpl >= 0) H5Pclose(dcpl);
+    if (sp >= 0) H5Sclose(sp);
+    return -1;
+}
+
+static double *row_f64(cd_h5_writer *w, int si)
+{
+    h5_series *s = w->ser + si;
+    return (double *)(void *)(s->buf + (size_t)w->nbuf * s->rowlen * sizeof(double));
+}
+static long long *row_i64(cd_h5_writer *w, int si)
+{
+    h5_series *s = w->ser + si;
+    return (long long *)(void *)(s->buf + (size_t)w->nbuf * s->rowlen * sizeof(long long));
+}
+static signed char *row_i8(cd_h5_writer *w, int si)
+{
+    h5_series *s = w->ser + si;
+    return (signed char *)(s->buf + (size_t)w->nbuf * s->rowlen);
+}
+
+/* Writes the pending rows of series s at rows [start, start + n). */
+static int write_rows(h5_series *s, long long start, int n)
+{
+    hsize_t dims[3], off[3] = {0, 0, 0}, cnt[3];
+    hid_t fs, ms;
+    herr_t r;
+    dims[0] = (hsize_t)(start + n);
+    dims[1] = s->tail[0];
+    dims[2] = s->tail[1];
+    if (H5Dset_extent(s->dset, dims) < 0) return -1;
+    if (n == 0) return 0;
+    off[0] = (hsize_t)start;
+    cnt[0] = (hsize_t)n;
+    cnt[1] = s->tail[0];
+    cnt[2] = s->tail[1];
+    fs = H5Dget_space(s->dset);
+    if (fs < 0) return -1;
+    if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
+    ms = H5Screate_simple(s->rank, cnt, NULL);
+    r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, s->buf) : -1;
+    if (ms >= 0) H5Sclose(ms);
+    H5Sclose(fs);
+    return r < 0 ? -1 : 0;
+}
+
+static int write_events(cd_h5_writer *w)
+{
+    hsize_t dim, off, cnt;
+    hid_t fs, ms;
+    herr_t r;
+    if (w->ev_nbuf == 0) return 0;
+    dim = (hsize_t)(w->ev_written + w->ev_nbuf);
+    if (H5Dset_extent(w->ev_dset, &dim) < 0) return -1;
+    off = (hsize_t)w->ev_written;
+    cnt = (hsize_t)w->ev_nbuf;
+    fs = H5Dget_space(w->ev_dset);
+    if (fs < 0) return -1;
+    if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, &off, NULL, &cnt, NULL) < 0) { H5Sclose(fs); return -1; }
+    ms = H5Screate_simple(1, &cnt, NULL);
+    r = ms >= 0 ? H5Dwrite(w->ev_dset, w->ev_mtype, ms, fs, H5P_DEFAULT, w->evbuf) : -1;
+    if (ms >= 0) H5Sclose(ms);
+    H5Sclose(fs);
+    if (r < 0) return -1;
+    w->ev_written += w->ev_nbuf;
+    w->ev_nbuf = 0;
+    return 0;
+}
+
+/* The commit protocol (see the top of the file). */
+static cd_status commit(cd_h5_writer *w, cd_error *err)
+{
+    int i;
+    hid_t ev;
+    if (w->failed) {
+        seterr(err, CD_EIO, "HDF5 results file is in a failed state after an earlier write error");
+        return CD_EIO;
+    }
+    for (i = 0; i < w->nser; i++)
+        if (write_rows(w->ser + i, w->nwritten, w->nbuf) < 0) {
+            w->failed = 1;
+            seterr(err, CD_EIO, "HDF5: writing %d rows of a time series failed (disk full?)", w->nbuf);
+            return CD_EIO;
+        }
+    if (write_events(w) < 0) {
+        w->failed = 1;
+        seterr(err, CD_EIO, "HDF5: writing the event table failed (disk full?)");
+        return CD_EIO;
+    }
+    w->nwritten += w->nbuf;
+    w->nbuf = 0;
+    ev = w->ev_dset;
+    if (attr_i64(ev, "lost", w->ev_lost) < 0 || H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0 ||
+        attr_i64(w->file, "committed_events", w->ev_written) < 0 ||
+        attr_i64(w->file, "committed_samples", w->nwritten) < 0 ||
+        H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
+        w->failed = 1;
+        seterr(err, CD_EIO, "HDF5: flushing the results file failed");
+        return CD_EIO;
+    }
+    return CD_OK;
+}
+
+/* ---- lifetime ---------------------------------------------------------------------- */
+static void writer_free(cd_h5_writer *w)
+{
+    int i;
+    if (!w) return;
+    for (i = 0; i < w->nser; i++) {
+        if (w->ser[i].dset >= 0) H5Dclose(w->ser[i].dset);
+        free(w->ser[i].buf);
+    }
+    free(w->ser);
+    free(w->s_sys);
+    free(w->evbuf);
+    if (w->ev_dset >= 0) H5Dclose(w->ev_dset);
+    if (w->ev_mtype >= 0) H5Tclose(w->ev_mtype);
+    if (w->ev_ftype >= 0) H5Tclose(w->ev_ftype);
+    if (w->kind_enum >= 0) H5Tclose(w->kind_enum);
+    if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
+    if (w->file >= 0) H5Fclose(w->file);
+    free(w);
+}
+
+/* A group name for system s: its own name when usable as one HDF5 link name
+ * (non-empty, no '/', not "." and unique), else "system_<s>". */
+static void sys_group_name(const cd_model *m, int s, char *out, size_t len)
+{
+    const char *n = m->sys_name[s];
+    int ok = n && n[0] && !strchr(n, '/') && strcmp(n, ".") != 0 && strlen(n) < len, j;
+    for (j = 0; ok && j < m->nsys; j++)
+        if (j != s && strcmp(m->sys_name[j], n) == 0) ok = 0;
+    if (ok) snprintf(out, len, "%s", n);
+    else snprintf(out, len, "system_%d", s);
+}
+
+static int create_event_types(cd_h5_writer *w)
+{
+    int k, v;
+    hid_t ct;
+    w->kind_enum = H5Tenum_create(H5T_NATIVE_INT);
+    w->mode_enum = H5Tenum_create(H5T_NATIVE_INT);
+    if (w->kind_enum < 0 || w->mode_enum < 0) return -1;
+    for (k = 0; k < CD_EV_NKINDS; k++) {
+        v = k;
+        H5Tenum_insert(w->kind_enum, cd_event_kind_name((cd_event_kind)k), &v);
+    }
+    for (k = 0; k <= CD_MODE_SLIP; k++) {
+        v = k;
+        H5Tenum_insert(w->mode_enum, cd_slot_mode_name((cd_slot_mode)k), &v);
+    }
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_event));
+    if (ct < 0) return -1;
+    ins(ct, "t", HOFFSET(cd_event, t), H5T_NATIVE_DOUBLE);
+    ins(ct, "kind", HOFFSET(cd_event, kind), w->kind_enum);
+    ins(ct, "slot", HOFFSET(cd_event, slot), H5T_NATIVE_INT);
+    ins(ct, "body_a", HOFFSET(cd_event, body_a), H5T_NATIVE_INT);
+    ins(ct, "body_b", HOFFSET(cd_event, body_b), H5T_NATIVE_INT);
+    ins(ct, "mode_from", HOFFSET(cd_event, mode_from), w->mode_enum);
+    ins(ct, "mode_to", HOFFSET(cd_event, mode_to), w->mode_enum);
+    ins(ct, "x", HOFFSET(cd_event, x), H5T_NATIVE_DOUBLE);
+    ins(ct, "fn", HOFFSET(cd_event, fn), H5T_NATIVE_DOUBLE);
+    ins(ct, "ft", HOFFSET(cd_event, ft), H5T_NATIVE_DOUBLE);
+    w->ev_mtype = ct;
+    w->ev_ftype = H5Tcopy(ct);
+    if (w->ev_ftype < 0) return -1;
+    H5Tpack(w->ev_ftype);
+    return 0;
+}
+
+static int create_layout(cd_h5_writer *w, const cd_model *m)
+{
+    hid_t g, gs, gc, gd;
+    int s, ok = 1;
+    hsize_t ns = (hsize_t)m->nsys, nk = (hsize_t)m->nslot;
+    w->s_time = add_series(w, w->file, "time", T_F64, 0, 0, 0, "s", "simulated time of each sample");
+    ok &= w->s_time >= 0;
+    /* systems */
+    g = H5Gcreate2(w->file, "systems", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (g < 0) return -1;
+    attr_int(g, "count", m->nsys);
+    for (s = 0; ok && s < m->nsys; s++) {
+        char name[128];
+        sys_series *ss = w->s_sys + s;
+        int nj = m->sys_nbody[s] - 1, b0 = m->sys_body_adr[s], i;
+        hsize_t nb = (hsize_t)m->sys_nbody[s];
+        const char **jn;
+        sys_group_name(m, s, name, sizeof name);
+        gs = H5Gcreate2(g, name, H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        if (gs < 0) { ok = 0; break; }
+        attr_str(gs, "name", m->sys_name[s]);
+        attr_int(gs, "index", s);
+        attr_str(gs, "base_type", m->sys_base_type[s] == CD_BASE_FREE ? "free" : "fixed");
+        attr_int(gs, "njoint", nj);
+        attr_int(gs, "body_first", b0);
+        attr_int(gs, "nbody", (int)nb);
+        jn = malloc((size_t)(m->sys_nbody[s]) * sizeof *jn);
+        if (jn) {
+            for (i = 0; i < (int)nb; i++) jn[i] = m->body_name[b0 + i];
+            attr_strv(gs, "body_names", (int)nb, jn, CD_H5_NAMELEN);
+            if (nj > 0) attr_strv(gs, "joint_names", nj, jn + 1, CD_H5_NAMELEN);
+            free(jn);
+        }
+        ss->pos = add_series(w, gs, "base_pos", T_F64, 1, 3, 0, "m", "base CoM position, world (SpaceDyn R0)");
+        ss->quat = add_series(w, gs, "base_quat", T_F64, 1, 4, 0, "1", "base orientation (w,x,y,z), body -> world");
+        ss->vel = add_series(w, gs, "base_vel", T_F64, 1, 3, 0, "m/s", "base CoM velocity, world");
+        ss->angvel = add_series(w, gs, "base_angvel", T_F64, 1, 3, 0, "rad/s", "base angular velocity, world");
+        ss->q = ss->qd = -1;
+        if (nj > 0) {
+            ss->q = add_series(w, gs, "q", T_F64, 1, (hsize_t)nj, 0, "rad|m", "joint positions, in body order");
+            ss->qd = add_series(w, gs, "qd", T_F64, 1, (hsize_t)nj, 0, "rad/s|m/s", "joint rates, in body order");
+            ok &= ss->q >= 0 && ss->qd >= 0;
+        }
+        ss->body_x = add_series(w, gs, "body_x", T_F64, 2, nb, 3, "m", "body frame origins (joint; base CoM), world");
+        ss->body_c = add_series(w, gs, "body_c", T_F64, 2, nb, 3, "m", "body centres of mass, world");
+        ss->body_quat = add_series(w, gs, "body_quat", T_F64, 2, nb, 4, "1", "body orientations (w,x,y,z), body -> world");
+        ok &= ss->pos >= 0 && ss->quat >= 0 && ss->vel >= 0 && ss->angvel >= 0 && ss->body_x >= 0 &&
+              ss->body_c >= 0 && ss->body_quat >= 0;
+        H5Gclose(gs);
+    }
+    H5Gclose(g);
+    if (!ok) return -1;
+    /* contacts */
+    gc = H5Gcreate2(w->file, "contacts", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (gc < 0) return -1;
+    attr_int(gc, "nslot", m->nslot);
+    {
+        static const char *const mode_names[3] = {"open", "stick", "slip"};
+        attr_strv(gc, "mode_names", 3, mode_names, 8);
+    }
+    if (write_slot_table(gc, m) < 0) ok = 0;
+    w->s_fn = w->s_ft = w->s_x = w->s_xdot = w->s_point = w->s_normal = w->s_vt = w->s_mode = -1;
+    if (ok && m->nslot > 0) {
+        w->s_fn = add_series(w, gc, "fn", T_F64, 1, nk, 0, "N", "normal force (0 when open)");
+        w->s_ft = add_series(w, gc, "ft", T_F64, 2, nk, 3, "N", "tangential force on the check-point body, world");
+        w->s_x = add_series(w, gc, "penetration", T_F64, 1, nk, 0, "m", "penetration depth, > 0 inside");
+        w->s_xdot = add_series(w, gc, "penetration_rate", T_F64, 1, nk, 0, "m/s", "penetration rate");
+        w->s_point = add_series(w, gc, "point", T_F64, 2, nk, 3, "m", "contact point, world");
+        w->s_normal = add_series(w, gc, "normal", T_F64, 2, nk, 3, "1", "unit normal from the shape toward the check point");
+        w->s_vt = add_series(w, gc, "slip_velocity", T_F64, 2, nk, 3, "m/s", "tangential relative velocity");
+        w->s_mode = add_series(w, gc, "mode", T_I8, 1, nk, 0, "1", "0 open, 1 stick, 2 slip");
+        ok &= w->s_fn >= 0 && w->s_ft >= 0 && w->s_x >= 0 && w->s_xdot >= 0 && w->s_point >= 0 &&
+              w->s_normal >= 0 && w->s_vt >= 0 && w->s_mode >= 0;
+    }
+    H5Gclose(gc);
+    if (!ok) return -1;
+    /* events */
+    {
+        hsize_t dim = 0, maxd = H5S_UNLIMITED, chunk = 512;
+        hid_t sp = H5Screate_simple(1, &dim, &maxd), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+        const char *kn[CD_EV_NKINDS];
+        int k;
+        if (sp < 0 || dcpl < 0) return -1;
+        H5Pset_chunk(dcpl, 1, &chunk);
+        H5Pset_deflate(dcpl, 4);
+        w->ev_dset = H5Dcreate2(w->file, "events", w->ev_ftype, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+        H5Pclose(dcpl);
+        H5Sclose(sp);
+        if (w->ev_dset < 0) return -1;
+        for (k = 0; k < CD_EV_NKINDS; k++) kn[k] = cd_event_kind_name((cd_event_kind)k);
+        attr_strv(w->ev_dset, "kind_names", CD_EV_NKINDS, kn, 24);
+        attr_i64(w->ev_dset, "lost", 0);
+        attr_str(w->ev_dset, "units", "t [s], x [m], fn [N], ft [N]");
+    }
+    /* diagnostics */
+    gd = H5Gcreate2(w->file, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+    if (gd < 0) return -1;
+    w->s_ke = add_series(w, gd, "kinetic_energy", T_F64, 1, ns, 0, "J", "kinetic energy per system");
+    w->s_pe = add_series(w, gd, "potential_energy", T_F64, 1, ns, 0, "J", "gravitational potential energy per system");
+    w->s_P = add_series(w, gd, "momentum", T_F64, 2, ns, 3, "kg m/s", "linear momentum per system, world");
+    w->s_Lc = add_series(w, gd, "angular_momentum_com", T_F64, 2, ns, 3, "kg m^2/s", "angular momentum about the system CoM");
+    w->s_Lo = add_series(w, gd, "angular_momentum_origin", T_F64, 2, ns, 3, "kg m^2/s", "angular momentum about the world origin");
+    w->s_com = add_series(w, gd, "com", T_F64, 2, ns, 3, "m", "system centre of mass, world");
+    w->s_h = add_series(w, gd, "step_size", T_F64, 0, 0, 0, "s", "last accepted integrator step");
+    w->s_nrhs = add_series(w, gd, "nrhs", T_I64, 0, 0, 0, "1", "right-hand-side evaluations so far");
+    w->s_nsteps = add_series(w, gd, "nsteps", T_I64, 0, 0, 0, "1", "accepted steps so far");
+    w->s_nrej = add_series(w, gd, "nrejected", T_I64, 0, 0, 0, "1", "rejected trial steps so far");
+    w->s_nev = add_series(w, gd, "nevents", T_I64, 0, 0, 0, "1", "events located so far");
+    w->s_wall = add_series(w, gd, "wall_time", T_F64, 0, 0, 0, "s", "wall-clock time since the file was created");
+    ok &= w->s_ke >= 0 && w->s_pe >= 0 && w->s_P >= 0 && w->s_Lc >= 0 && w->s_Lo >= 0 && w->s_com >= 0 &&
+          w->s_h >= 0 && w->s_nrhs >= 0 && w->s_nsteps >= 0 && w->s_nrej >= 0 && w->s_nev >= 0 && w->s_wall >= 0;
+    H5Gclose(gd);
+    return ok ? 0 : -1;
+}
+
+static int alloc_buffers(cd_h5_writer *w)
+{
+    size_t rowbytes = 0;
+    int i;
+    for (i = 0; i < w->nser; i++) rowbytes += w->ser[i].rowlen * type_size(w->ser[i].type);
+    /* at most 1024 rows and about 8 MiB pending; a full buffer forces a commit */
+    w->cap_rows = (int)((8u << 20) / (rowbytes ? rowbytes : 1));
+    if (w->cap_rows > 1024) w->cap_rows = 1024;
+    if (w->cap_rows < 1) w->cap_rows = 1;
+    for (i = 0; i < w->nser; i++) {
+        w->ser[i].buf = malloc((size_t)w->cap_rows * w->ser[i].rowlen * type_size(w->ser[i].type));
+        if (!w->ser[i].buf) return -1;
+    }
+    return 0;
+}
+
+static void utc_now(char *out, size_t len)
+{
+    time_t now = time(NULL);
+    struct tm tmv;
+    if (gmtime_r(&now, &tmv)) strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tmv);
+    else snprintf(out, len, "unknown");
+}
+
+static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenario *sc)
+{
+    hid_t f = w->file;
+    char when[64];
+    int rc = 0;
+    utc_now(when, sizeof when);
+    rc |= attr_str(f, "format", "capdyn-results");
+    rc |= attr_int(f, "format_version", CD_H5_FORMAT_VERSION);
+    rc |= attr_str(f, "capdyn_version", cd_version());
+    rc |= attr_str(f, "created_utc", when);
+    rc |= attr_str(f, "title", sc && sc->title ? sc->title : "");
+    rc |= attr_str(f, "scenario_path", sc && sc->path ? sc->path : "");
+    rc |= attr_text(f, "scenario_text", sc && sc->text ? sc->text : "");
+    rc |= attr_text(f, "overrides", sc && sc->overrides ? sc->overrides : "");
+    rc |= attr_f64(f, "duration", sc ? sc->duration : 0.0);
+    rc |= attr_f64(f, "output_dt", sc ? sc->output_dt : 0.0);
+    rc |= attr_int(f, "nsys", m->nsys);
+    rc |= attr_int(f, "nbody", m->nbody);
+    rc |= attr_int(f, "ncheckpoint", m->ncp);
+    rc |= attr_int(f, "nshape", m->nshape);
+    rc |= attr_int(f, "nslot", m->nslot);
+    rc |= attr_int(f, "ny", m->ny);
+    rc |= attr_str(f, "stepper", cd_stepper_name(m->opt.stepper));
+    rc |= attr_f64(f, "rtol", m->opt.rtol);
+    rc |= attr_f64(f, "atol", m->opt.atol);
+    rc |= attr_f64(f, "h_max", m->opt.h_max);
+    rc |= attr_f64(f, "event_tol", m->opt.event_tol);
+    rc |= attr_f64(f, "dwell", m->opt.dwell);
+    rc |= attr_f64v(f, "gravity", 3, m->gravity);
+    rc |= attr_str(f, "run_status", "running");
+    rc |= attr_int(f, "run_status_code", -1);
+    rc |= attr_str(f, "run_message", "the run has not finished (or was killed)");
+    rc |= attr_i64(f, "committed_events", 0);
+    rc |= attr_i64(f, "committed_samples", 0);
+    return rc ? -1 : 0;
+}
+
+cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err)
+{
+    cd_h5_writer *w;
+    h5_quiet q;
+    struct stat st;
+    int existed;
+    FILE *probe;
+    if (!path || !m || !m->finalized) {
+        seterr(err, CD_EINVAL, "cd_h5_create: path or model missing, or model not finalized");
+        return NULL;
+    }
+    /* fail fast with the system's reason (HDF5's own message does not carry errno) */
+    existed = stat(path, &st) == 0;
+    if (existed && S_ISDIR(st.st_mode)) {
+        seterr(err, CD_EIO, "cannot create results file '%s': it is a directory", path);
+        return NULL;
+    }
+    probe = fopen(path, "ab");
+    if (!probe) {
+        seterr(err, CD_EIO, "cannot create results file '%s': %s", path, strerror(errno));
+        return NULL;
+    }
+    fclose(probe);
+    w = calloc(1, sizeof *w);
+    if (!w) {
+        if (!existed) remove(path);
+        seterr(err, CD_ENOMEM, "out of memory");
+        return NULL;
+    }
+    w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = -1;
+    w->nsys = m->nsys;
+    w->nbody = m->nbody;
+    w->nslot = m->nslot;
+    w->ny = m->ny;
+    clock_gettime(CLOCK_MONOTONIC, &w->wall0);
+    w->s_sys = calloc((size_t)m->nsys, sizeof *w->s_sys);
+    if (!w->s_sys) {
+        free(w);
+        if (!existed) remove(path);
+        seterr(err, CD_ENOMEM, "out of memory");
+        return NULL;
+    }
+    quiet_begin(&q);
+    w->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    if (w->file < 0) {
+        quiet_end(&q);
+        writer_free(w);
+        if (!existed) remove(path);
+        seterr(err, CD_EIO, "cannot create results file '%s': HDF5 refused to create it", path);
+        return NULL;
+    }
+    if (create_event_types(w) < 0 || write_root_attrs(w, m, sc) < 0 || write_model_tables(w->file, m) < 0 ||
+        create_layout(w, m) < 0 || alloc_buffers(w) < 0 ||
+        H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
+        writer_free(w);
+        quiet_end(&q);
+        remove(path);
+        seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full or HDF5 error)", path);
+        return NULL;
+    }
+    quiet_end(&q);
+    return w;
+}
+
+/* Takes the events logged since the last call from d's ring buffer. */
+static int take_events(cd_h5_writer *w, const cd_data *d)
+{
+    long held = d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap;
+    long first = d->ev_count - held, g;
+    if (d->ev_count < w->ev_next) w->ev_next = 0; /* d was reset: start over */
+    if (w->ev_next < first) {
+        w->ev_lost += first - w->ev_next; /* overwritten in the ring before we saw them */
+        w->ev_next = first;
+    }
+    for (g = w->ev_next; g < d->ev_count; g++) {
+        const cd_event *e = cd_data_event(d, g - first);
+        if (!e) continue;
+        if (w->ev_nbuf == w->ev_capbuf) {
+            long nc = w->ev_capbuf ? 2 * w->ev_capbuf : 256;
+            cd_event *nb = realloc(w->evbuf, (size_t)nc * sizeof *nb);
+            if (!nb) return -1;
+            w->evbuf = nb;
+            w->ev_capbuf = nc;
+        }
+        w->evbuf[w->ev_nbuf++] = *e;
+    }
+    w->ev_next = d->ev_count;
+    return 0;
+}
+
+cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_error *err)
+{
+    int s, k, b, i;
+    struct timespec now;
+    if (!w || !m || !d) {
+        seterr(err, CD_EINVAL, "cd_h5_append: NULL argument");
+        return CD_EINVAL;
+    }
+    if (m->nsys != w->nsys || m->nbody != w->nbody || m->nslot != w->nslot || m->ny != w->ny) {
+        seterr(err, CD_EINVAL, "cd_h5_append: the model is not the one the file was created for");
+        return CD_EINVAL;
+    }
+    if (w->failed) {
+        seterr(err, CD_EIO, "HDF5 results file is in a failed state after an earlier write error");
+        return CD_EIO;
+    }
+    row_f64(w, w->s_time)[0] = d->t;
+    for (s = 0; s < m->nsys; s++) {
+        const sys_series *ss = w->s_sys + s;
+        cd_sys_state x = cd_state_of(m, d, s);
+        int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s];
+        double *p = row_f64(w, ss->pos), *qt = row_f64(w, ss->quat), *v = row_f64(w, ss->vel),
+               *av = row_f64(w, ss->angvel);
+        if (x.pos) {
+            memcpy(p, x.pos, 3 * sizeof(double));
+            memcpy(qt, x.quat, 4 * sizeof(double));
+            memcpy(v, x.vel, 3 * sizeof(double));
+            memcpy(av, x.angvel, 3 * sizeof(double));
+        } else {
+            /* a fixed base keeps its initial pose and does not move */
+            memcpy(p, m->sys_pos0 + 3 * s, 3 * sizeof(double));
+            memcpy(qt, m->sys_quat0 + 4 * s, 4 * sizeof(double));
+            memset(v, 0, 3 * sizeof(double));
+            memset(av, 0, 3 * sizeof(double));
+        }
+        if (ss->q >= 0) {
+            memcpy(row_f64(w, ss->q), x.q, (size_t)x.njoint * sizeof(double));
+            memcpy(row_f64(w, ss->qd), x.qd, (size_t)x.njoint * sizeof(double));
+        }
+        {
+            double *bx = row_f64(w, ss->body_x), *bc = row_f64(w, ss->body_c), *bq = row_f64(w, ss->body_quat);
+            for (i = 0; i < nb; i++) {
+                b = b0 + i;
+                memcpy(bx + 3 * i, d->body_x + 3 * b, 3 * sizeof(double));
+                memcpy(bc + 3 * i, d->body_c + 3 * b, 3 * sizeof(double));
+                cd_m3_to_quat(bq + 4 * i, d->body_R + 9 * b);
+            }
+        }
+    }
+    if (m->nslot > 0) {
+        size_t n1 = (size_t)m->nslot * sizeof(double), n3 = 3 * n1;
+        signed char *mo = row_i8(w, w->s_mode);
+        memcpy(row_f64(w, w->s_fn), d->slot_fn, n1);
+        memcpy(row_f64(w, w->s_ft), d->slot_ft, n3);
+        memcpy(row_f64(w, w->s_x), d->slot_x, n1);
+        memcpy(row_f64(w, w->s_xdot), d->slot_xdot, n1);
+        memcpy(row_f64(w, w->s_point), d->slot_point, n3);
+        memcpy(row_f64(w, w->s_normal), d->slot_normal, n3);
+        memcpy(row_f64(w, w->s_vt), d->slot_vt, n3);
+        for (k = 0; k < m->nslot; k++) mo[k] = (signed char)d->slot_mode[k];
+    }
+    {
+        double *ke = row_f64(w, w->s_ke), *pe = row_f64(w, w->s_pe), *P = row_f64(w, w->s_P),
+               *Lc = row_f64(w, w->s_Lc), *Lo = row_f64(w, w->s_Lo), *com = row_f64(w, w->s_com);
+        for (s = 0; s < m->nsys; s++) {
+            cd_momentum(m, d, s, ke + s, P + 3 * s, Lc + 3 * s, Lo + 3 * s, com + 3 * s);
+            pe[s] = cd_potential_energy(m, d, s);
+        }
+    }
+    row_f64(w, w->s_h)[0] = d->stats.h_last;
+    row_i64(w, w->s_nrhs)[0] = d->stats.nrhs;
+    row_i64(w, w->s_nsteps)[0] = d->stats.nsteps;
+    row_i64(w, w->s_nrej)[0] = d->stats.nrejected;
+    row_i64(w, w->s_nev)[0] = d->stats.nevents;
+    clock_gettime(CLOCK_MONOTONIC, &now);
+    row_f64(w, w->s_wall)[0] = (double)(now.tv_sec - w->wall0.tv_sec) + 1e-9 * (double)(now.tv_nsec - w->wall0.tv_nsec);
+    if (take_events(w, d) < 0) {
+        seterr(err, CD_ENOMEM, "out of memory buffering events");
+        return CD_ENOMEM;
+    }
+    w->nbuf++;
+    if (w->nbuf == w->cap_rows) {
+        h5_quiet q;
+        cd_status st;
+        quiet_begin(&q);
+        st = commit(w, err);
+        quiet_end(&q);
+        return st;
+    }
+    return CD_OK;
+}
+
+cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err)
+{
+    h5_quiet q;
+    cd_status st;
+    if (!w) {
+        seterr(err, CD_EINVAL, "cd_h5_flush: NULL writer");
+        return CD_EINVAL;
+    }
+    quiet_begin(&q);
+    st = commit(w, err);
+    quiet_end(&q);
+    return st;
+}
+
+cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,
+                      const char *message, cd_error *err)
+{
+    h5_quiet q;
+    cd_status st = CD_OK;
+    hid_t f;
+    int rc = 0;
+    if (!w) return CD_OK;
+    quiet_begin(&q);
+    f = w->file;
+    /* the last events (logged after the last sample) still belong in the table */
+    if (d && m && !w->failed && take_events(w, d) < 0) rc = -1;
+    rc |= attr_str(f, "run_status", cd_status_string(run_status));
+    rc |= attr_int(f, "run_status_code", (int)run_status);
+    rc |= attr_str(f, "run_message", message ? message : "");
+    if (d) {
+        const cd_stats *s = &d->stats;
+        rc |= attr_f64(f, "t_final", d->t);
+        rc |= attr_i64(f, "stats_nrhs", s->nrhs);
+        rc |= attr_i64(f, "stats_nsteps", s->nsteps);
+        rc |= attr_i64(f, "stats_nrejected", s->nrejected);
+        rc |= attr_i64(f, "stats_nevents", s->nevents);
+        rc |= attr_i64(f, "stats_nlocate_steps", s->nlocate_steps);
+        rc |= attr_i64(f, "stats_nwarn_geom", s->nwarn_geom);
+        rc |= attr_i64(f, "stats_nwarn_dwell", s->nwarn_dwell);
+        rc |= attr_i64(f, "stats_nrenorm", s->nrenorm);
+        rc |= attr_f64(f, "stats_h_last", s->h_last);
+        rc |= attr_f64(f, "stats_h_min", s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0);
+        rc |= attr_f64(f, "stats_h_max", s->h_max_seen);
+    }
+    {
+        char when[64];
+        utc_now(when, sizeof when);
+        rc |= attr_str(f, "closed_utc", when);
+    }
+    if (rc) {
+        w->failed = 1;
+        seterr(err, CD_EIO, "HDF5: writing the final attributes failed");
+        st = CD_EIO;
+    } else {
+        st = commit(w, err);
+    }
+    writer_free(w);
+    quiet_end(&q);
+    return st;
+}

@@ -1,0 +1,538 @@
+/* Reader of capdyn HDF5 results (see h5_read.h and docs/results-format.md).
+ *
+ * Compound tables are read through memory types that name only the members
+ * needed: HDF5 matches compound members by name, so the reader keeps working
+ * when later format versions add members. */
+#include "h5_read.h"
+
+#include <hdf5.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct { H5E_auto2_t func; void *data; } quiet_t;
+static void quiet_begin(quiet_t *q)
+{
+    (void)H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
+    (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
+}
+static void quiet_end(const quiet_t *q) { (void)H5Eset_auto2(H5E_DEFAULT, q->func, q->data); }
+
+static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
+{
+    va_list ap;
+    if (!err) return;
+    err->status = st;
+    va_start(ap, fmt);
+    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
+    va_end(ap);
+}
+
+#define FID(r) ((hid_t)(r)->id)
+
+static hid_t str_t(size_t n)
+{
+    hid_t t = H5Tcopy(H5T_C_S1);
+    H5Tset_size(t, n);
+    H5Tset_strpad(t, H5T_STR_NULLTERM);
+    H5Tset_cset(t, H5T_CSET_UTF8); /* the writer's strings are UTF-8 */
+    return t;
+}
+static void mem_str(hid_t ct, const char *name, size_t off, size_t n)
+{
+    hid_t t = str_t(n);
+    H5Tinsert(ct, name, off, t);
+    H5Tclose(t);
+}
+static void mem_arr(hid_t ct, const char *name, size_t off, hsize_t n)
+{
+    hid_t t = H5Tarray_create2(H5T_NATIVE_DOUBLE, 1, &n);
+    H5Tinsert(ct, name, off, t);
+    H5Tclose(t);
+}
+
+/* rows of a 1-D table; returns the count or -1 */
+static long table_rows(hid_t f, const char *path)
+{
+    hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
+    hsize_t d[2] = {0, 0};
+    if (ds < 0) return -1;
+    sp = H5Dget_space(ds);
+    H5Sget_simple_extent_dims(sp, d, NULL);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    return (long)d[0];
+}
+
+static int read_table(hid_t f, const char *path, hid_t mt, long n, void *out)
+{
+    hid_t ds;
+    herr_t rc;
+    if (n <= 0) return 0;
+    ds = H5Dopen2(f, path, H5P_DEFAULT);
+    if (ds < 0) return -1;
+    rc = H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
+    H5Dclose(ds);
+    return rc < 0 ? -1 : 0;
+}
+
+int cd_h5r_exists(const cd_h5r *r, const char *path)
+{
+    quiet_t q;
+    htri_t e;
+    const char *p;
+    char buf[512];
+    quiet_begin(&q);
+    /* H5Lexists needs every intermediate link to exist: walk the path */
+    e = 1;
+    p = path + 1;
+    while (e > 0 && *p) {
+        const char *s = strchr(p, '/');
+        size_t n = s ? (size_t)(s - path) : strlen(path);
+        if (n >= sizeof buf) { e = 0; break; }
+        memcpy(buf, path, n);
+        buf[n] = 0;
+        e = H5Lexists(FID(r), buf, H5P_DEFAULT);
+        if (!s) break;
+        p = s + 1;
+    }
+    quiet_end(&q);
+    return e > 0;
+}
+
+char *cd_h5r_attr_str(const cd_h5r *r, const char *obj, const char *name)
+{
+    quiet_t q;
+    hid_t a, t, mt;
+    char *s = NULL;
+    size_t n;
+    quiet_begin(&q);
+    a = H5Aopen_by_name(FID(r), obj, name, H5P_DEFAULT, H5P_DEFAULT);
+    if (a >= 0) {
+        t = H5Aget_type(a);
+        if (H5Tget_class(t) == H5T_STRING && !H5Tis_variable_str(t)) {
+            n = H5Tget_size(t);
+            mt = H5Tcopy(t); /* keep the file's character set: HDF5 will not convert it */
+            H5Tset_size(mt, n + 1);
+            s = calloc(1, n + 2);
+            if (s && H5Aread(a, mt, s) < 0) { free(s); s = NULL; }
+            H5Tclose(mt);
+        }
+        H5Tclose(t);
+        H5Aclose(a);
+    }
+    quiet_end(&q);
+    return s;
+}
+
+char *cd_h5r_text(const cd_h5r *r, const char *name)
+{
+    char *s = cd_h5r_attr_str(r, "/", name), path[256];
+    quiet_t q;
+    hid_t ds;
+    if (!s || strncmp(s, "@dataset /", 10) != 0) return s;
+    free(s);
+    s = NULL;
+    snprintf(path, sizeof path, "/%s", name);
+    quiet_begin(&q);
+    ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
+    if (ds >= 0) {
+        hid_t sp = H5Dget_space(ds);
+        hssize_t n = H5Sget_simple_extent_npoints(sp);
+        s = calloc(1, (size_t)(n > 0 ? n : 0) + 1);
+        if (s && n > 0 && H5Dread(ds, H5T_NATIVE_CHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, s) < 0) { free(s); s = NULL; }
+        H5Sclose(sp);
+        H5Dclose(ds);
+    }
+    quiet_end(&q);
+    return s;
+}
+
+static int attr_num(const cd_h5r *r, const char *obj, const char *name, hid_t mt, void *v, int n)
+{
+    quiet_t q;
+    hid_t a, sp;
+    int rc = -1;
+    quiet_begin(&q);
+    a = H5Aopen_by_name(FID(r), obj, name, H5P_DEFAULT, H5P_DEFAULT);
+    if (a >= 0) {
+        sp = H5Aget_space(a);
+        if (H5Sget_simple_extent_npoints(sp) == n && H5Aread(a, mt, v) >= 0) rc = 0;
+        H5Sclose(sp);
+        H5Aclose(a);
+    }
+    quiet_end(&q);
+    return rc;
+}
+int cd_h5r_attr_f64(const cd_h5r *r, const char *obj, const char *name, double *v)
+{ return attr_num(r, obj, name, H5T_NATIVE_DOUBLE, v, 1); }
+int cd_h5r_attr_f64v(const cd_h5r *r, const char *obj, const char *name, double *v, int n)
+{ return attr_num(r, obj, name, H5T_NATIVE_DOUBLE, v, n); }
+int cd_h5r_attr_i64(const cd_h5r *r, const char *obj, const char *name, long long *v)
+{ return attr_num(r, obj, name, H5T_NATIVE_LLONG, v, 1); }
+
+static int attr_int_of(hid_t obj, const char *name, int *v)
+{
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+    int rc = -1;
+    if (a >= 0) {
+        if (H5Aread(a, H5T_NATIVE_INT, v) >= 0) rc = 0;
+        H5Aclose(a);
+    }
+    return rc;
+}
+static int attr_str_of(hid_t obj, const char *name, char *out, size_t len)
+{
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t, mt;
+    int rc = -1;
+    char *tmp;
+    size_t n;
+    out[0] = 0;
+    if (a < 0) return -1;
+    t = H5Aget_type(a);
+    n = H5Tget_size(t);
+    mt = H5Tcopy(t);
+    H5Tset_size(mt, n + 1);
+    tmp = calloc(1, n + 2);
+    if (tmp && H5Aread(a, mt, tmp) >= 0) {
+        snprintf(out, len, "%s", tmp);
+        rc = 0;
+    }
+    free(tmp);
+    H5Tclose(mt);
+    H5Tclose(t);
+    H5Aclose(a);
+    return rc;
+}
+
+typedef struct { cd_h5r *r; int i; int fail; } sys_iter;
+
+static herr_t sys_cb(hid_t g, const char *name, const H5L_info_t *info, void *op)
+{
+    sys_iter *it = (sys_iter *)op;
+    hid_t gs;
+    cd_h5r_sys *s;
+    char bt[16];
+    (void)info;
+    if (it->i >= it->r->nsys) return 0;
+    gs = H5Gopen2(g, name, H5P_DEFAULT);
+    if (gs < 0) { it->fail = 1; return -1; }
+    {
+        int idx = -1;
+        if (attr_int_of(gs, "index", &idx) < 0 || idx < 0 || idx >= it->r->nsys) {
+            H5Gclose(gs);
+            it->fail = 1;
+            return -1;
+        }
+        s = it->r->sys + idx;
+    }
+    snprintf(s->group, sizeof s->group, "%s", name);
+    if (attr_str_of(gs, "name", s->name, sizeof s->name) < 0) snprintf(s->name, sizeof s->name, "%s", name);
+    attr_str_of(gs, "base_type", bt, sizeof bt);
+    s->base_free = strcmp(bt, "free") == 0;
+    attr_int_of(gs, "njoint", &s->njoint);
+    attr_int_of(gs, "body_first", &s->body_first);
+    attr_int_of(gs, "nbody", &s->nbody);
+    H5Gclose(gs);
+    it->i++;
+    return 0;
+}
+
+void cd_h5r_close(cd_h5r *r)
+{
+    quiet_t q;
+    if (!r) return;
+    quiet_begin(&q);
+    if (r->id >= 0) H5Fclose(FID(r));
+    quiet_end(&q);
+    free(r->sys);
+    free(r->body);
+    free(r->cp);
+    free(r->shape);
+    free(r->vert);
+    free(r->slot);
+    free(r);
+}
+
+static int read_static(cd_h5r *r)
+{
+    hid_t f = FID(r), ct;
+    long n;
+    int rc = 0;
+    /* systems */
+    {
+        hid_t g = H5Gopen2(f, "/systems", H5P_DEFAULT);
+        sys_iter it;
+        hsize_t idx = 0;
+        H5G_info_t gi;
+        if (g < 0) return -1;
+        H5Gget_info(g, &gi);
+        r->nsys = (int)gi.nlinks;
+        r->sys = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *r->sys);
+        if (!r->sys) { H5Gclose(g); return -1; }
+        it.r = r;
+        it.i = 0;
+        it.fail = 0;
+        H5Literate(g, H5_INDEX_NAME, H5_ITER_NATIVE, &idx, sys_cb, &it);
+        H5Gclose(g);
+        if (it.fail || it.i != r->nsys) return -1;
+    }
+    /* bodies */
+    n = table_rows(f, "/model/bodies");
+    if (n < 0) return -1;
+    r->nbody = (int)n;
+    r->body = calloc((size_t)(n ? n : 1), sizeof *r->body);
+    if (!r->body) return -1;
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_h5r_body));
+    H5Tinsert(ct, "system", HOFFSET(cd_h5r_body, system), H5T_NATIVE_INT);
+    H5Tinsert(ct, "parent", HOFFSET(cd_h5r_body, parent), H5T_NATIVE_INT);
+    H5Tinsert(ct, "joint_type", HOFFSET(cd_h5r_body, joint_type), H5T_NATIVE_INT);
+    mem_str(ct, "name", HOFFSET(cd_h5r_body, name), sizeof r->body->name);
+    mem_str(ct, "full_name", HOFFSET(cd_h5r_body, full_name), sizeof r->body->full_name);
+    H5Tinsert(ct, "mass", HOFFSET(cd_h5r_body, mass), H5T_NATIVE_DOUBLE);
+    mem_arr(ct, "com", HOFFSET(cd_h5r_body, com), 3);
+    mem_arr(ct, "inertia", HOFFSET(cd_h5r_body, inertia), 9);
+    rc |= read_table(f, "/model/bodies", ct, n, r->body);
+    H5Tclose(ct);
+    /* check points */
+    n = table_rows(f, "/model/checkpoints");
+    if (n < 0) return -1;
+    r->ncp = (int)n;
+    r->cp = calloc((size_t)(n ? n : 1), sizeof *r->cp);
+    if (!r->cp) return -1;
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_h5r_cp));
+    H5Tinsert(ct, "body", HOFFSET(cd_h5r_cp, body), H5T_NATIVE_INT);
+    mem_arr(ct, "pos", HOFFSET(cd_h5r_cp, pos), 3);
+    H5Tinsert(ct, "radius", HOFFSET(cd_h5r_cp, radius), H5T_NATIVE_DOUBLE);
+    rc |= read_table(f, "/model/checkpoints", ct, n, r->cp);
+    H5Tclose(ct);
+    /* shapes */
+    n = table_rows(f, "/model/shapes");
+    if (n < 0) return -1;
+    r->nshape = (int)n;
+    r->shape = calloc((size_t)(n ? n : 1), sizeof *r->shape);
+    if (!r->shape) return -1;
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_h5r_shape));
+    H5Tinsert(ct, "body", HOFFSET(cd_h5r_shape, body), H5T_NATIVE_INT);
+    H5Tinsert(ct, "type", HOFFSET(cd_h5r_shape, type), H5T_NATIVE_INT);
+    mem_arr(ct, "pos", HOFFSET(cd_h5r_shape, pos), 3);
+    mem_arr(ct, "rot", HOFFSET(cd_h5r_shape, rot), 9);
+    mem_arr(ct, "size", HOFFSET(cd_h5r_shape, size), 3);
+    H5Tinsert(ct, "vert_adr", HOFFSET(cd_h5r_shape, vert_adr), H5T_NATIVE_INT);
+    H5Tinsert(ct, "vert_num", HOFFSET(cd_h5r_shape, vert_num), H5T_NATIVE_INT);
+    rc |= read_table(f, "/model/shapes", ct, n, r->shape);
+    H5Tclose(ct);
+    /* vertices */
+    n = table_rows(f, "/model/vertices");
+    r->nvert = n > 0 ? (int)n : 0;
+    r->vert = calloc((size_t)(r->nvert ? r->nvert : 1) * 3, sizeof(double));
+    if (!r->vert) return -1;
+    if (r->nvert > 0) rc |= read_table(f, "/model/vertices", H5T_NATIVE_DOUBLE, r->nvert, r->vert);
+    /* slots */
+    n = table_rows(f, "/contacts/slots");
+    if (n < 0) return -1;
+    r->nslot = (int)n;
+    r->slot = calloc((size_t)(n ? n : 1), sizeof *r->slot);
+    if (!r->slot) return -1;
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_h5r_slot));
+    H5Tinsert(ct, "checkpoint", HOFFSET(cd_h5r_slot, checkpoint), H5T_NATIVE_INT);
+    H5Tinsert(ct, "shape", HOFFSET(cd_h5r_slot, shape), H5T_NATIVE_INT);
+    H5Tinsert(ct, "body_a", HOFFSET(cd_h5r_slot, body_a), H5T_NATIVE_INT);
+    H5Tinsert(ct, "body_b", HOFFSET(cd_h5r_slot, body_b), H5T_NATIVE_INT);
+    mem_str(ct, "body_a_name", HOFFSET(cd_h5r_slot, body_a_name), sizeof r->slot->body_a_name);
+    mem_str(ct, "body_b_name", HOFFSET(cd_h5r_slot, body_b_name), sizeof r->slot->body_b_name);
+    mem_str(ct, "shape_type", HOFFSET(cd_h5r_slot, shape_type), sizeof r->slot->shape_type);
+    rc |= read_table(f, "/contacts/slots", ct, n, r->slot);
+    H5Tclose(ct);
+    return rc ? -1 : 0;
+}
+
+cd_h5r *cd_h5r_open(const char *path, cd_error *err)
+{
+    quiet_t q;
+    hid_t fapl, f;
+    cd_h5r *r;
+    long long c = -1;
+    long rows;
+    char *fmt;
+    quiet_begin(&q);
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    H5Pset_file_locking(fapl, 0, 1);
+    f = H5Fopen(path, H5F_ACC_RDONLY, fapl);
+    H5Pclose(fapl);
+    quiet_end(&q);
+    if (f < 0) {
+        FILE *probe = fopen(path, "rb");
+        if (!probe) seterr(err, CD_EIO, "cannot open '%s': no such file or not readable", path);
+        else {
+            fclose(probe);
+            seterr(err, CD_EIO, "cannot open '%s': not an HDF5 file, or damaged", path);
+        }
+        return NULL;
+    }
+    r = calloc(1, sizeof *r);
+    if (!r) {
+        H5Fclose(f);
+        seterr(err, CD_ENOMEM, "out of memory");
+        return NULL;
+    }
+    r->id = (long long)f;
+    fmt = cd_h5r_attr_str(r, "/", "format");
+    if (!fmt || strcmp(fmt, "capdyn-results") != 0) {
+        free(fmt);
+        cd_h5r_close(r);
+        seterr(err, CD_EIO, "'%s' is an HDF5 file but not a capdyn results file (no format = \"capdyn-results\")", path);
+        return NULL;
+    }
+    free(fmt);
+    quiet_begin(&q);
+    rows = table_rows(f, "/time");
+    quiet_end(&q);
+    r->nrows = rows > 0 ? rows : 0;
+    r->n = r->nrows;
+    if (cd_h5r_attr_i64(r, "/", "committed_samples", &c) == 0 && c >= 0 && c < r->n) r->n = (long)c;
+    quiet_begin(&q);
+    rows = table_rows(f, "/events");
+    quiet_end(&q);
+    r->nev = rows > 0 ? rows : 0;
+    c = -1;
+    if (cd_h5r_attr_i64(r, "/", "committed_events", &c) == 0 && c >= 0 && c < r->nev) r->nev = (long)c;
+    c = 0;
+    cd_h5r_attr_i64(r, "/events", "lost", &c);
+    r->ev_lost = c;
+    quiet_begin(&q);
+    rows = read_static(r);
+    quiet_end(&q);
+    if (rows < 0) {
+        cd_h5r_close(r);
+        seterr(err, CD_EIO, "'%s': the model tables (/systems, /model, /contacts/slots) are missing or damaged", path);
+        return NULL;
+    }
+    return r;
+}
+
+double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err)
+{
+    quiet_t q;
+    hid_t ds, fs, ms;
+    hsize_t d[4] = {0, 0, 0, 0}, off[4] = {0, 0, 0, 0}, cnt[4];
+    int rank, i;
+    size_t rl = 1;
+    double *v = NULL;
+    quiet_begin(&q);
+    ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
+    if (ds < 0) {
+        quiet_end(&q);
+        seterr(err, CD_EIO, "no dataset %s in the results file", path);
+        return NULL;
+    }
+    fs = H5Dget_space(ds);
+    rank = H5Sget_simple_extent_dims(fs, d, NULL);
+    if (rank < 1 || rank > 4 || (long)d[0] < r->n) {
+        H5Sclose(fs);
+        H5Dclose(ds);
+        quiet_end(&q);
+        seterr(err, CD_EIO, "dataset %s is shorter than the committed sample count", path);
+        return NULL;
+    }
+    for (i = 1; i < rank; i++) rl *= (size_t)d[i];
+    cnt[0] = (hsize_t)r->n;
+    for (i = 1; i < rank; i++) cnt[i] = d[i];
+    v = malloc(((size_t)r->n * rl > 0 ? (size_t)r->n * rl : 1) * sizeof *v);
+    if (v && r->n > 0 && rl > 0) {
+        H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL);
+        ms = H5Screate_simple(rank, cnt, NULL);
+        if (H5Dread(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, v) < 0) {
+            free(v);
+            v = NULL;
+        }
+        H5Sclose(ms);
+    }
+    H5Sclose(fs);
+    H5Dclose(ds);
+    quiet_end(&q);
+    if (!v) {
+        seterr(err, CD_EIO, "reading %s failed", path);
+        return NULL;
+    }
+    if (rowlen) *rowlen = rl;
+    return v;
+}
+
+cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
+{
+    quiet_t q;
+    hid_t ds, fs, ms, ft, ct, kt, mt;
+    hsize_t off = 0, cnt = (hsize_t)r->nev;
+    cd_event *ev = calloc((size_t)(r->nev ? r->nev : 1), sizeof *ev);
+    herr_t rc = 0;
+    int idx;
+    *n = 0;
+    if (!ev) {
+        seterr(err, CD_ENOMEM, "out of memory");
+        return NULL;
+    }
+    if (r->nev == 0) return ev;
+    quiet_begin(&q);
+    ds = H5Dopen2(FID(r), "/events", H5P_DEFAULT);
+    if (ds < 0) {
+        quiet_end(&q);
+        free(ev);
+        seterr(err, CD_EIO, "no /events table");
+        return NULL;
+    }
+    /* the enum members are read with the file's own enum types (HDF5 does not
+     * convert enums to plain integers) */
+    ft = H5Dget_type(ds);
+    idx = H5Tget_member_index(ft, "kind");
+    kt = idx >= 0 ? H5Tget_member_type(ft, (unsigned)idx) : -1;
+    idx = H5Tget_member_index(ft, "mode_from");
+    mt = idx >= 0 ? H5Tget_member_type(ft, (unsigned)idx) : -1;
+    ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_event));
+    H5Tinsert(ct, "t", HOFFSET(cd_event, t), H5T_NATIVE_DOUBLE);
+    if (kt >= 0) {
+        hid_t nkt = H5Tget_native_type(kt, H5T_DIR_DEFAULT);
+        H5Tinsert(ct, "kind", HOFFSET(cd_event, kind), nkt);
+        H5Tclose(nkt);
+    }
+    if (mt >= 0) {
+        hid_t nmt = H5Tget_native_type(mt, H5T_DIR_DEFAULT);
+        H5Tinsert(ct, "mode_from", HOFFSET(cd_event, mode_from), nmt);
+        H5Tinsert(ct, "mode_to", HOFFSET(cd_event, mode_to), nmt);
+        H5Tclose(nmt);
+    }
+    H5Tinsert(ct, "slot", HOFFSET(cd_event, slot), H5T_NATIVE_INT);
+    H5Tinsert(ct, "body_a", HOFFSET(cd_event, body_a), H5T_NATIVE_INT);
+    H5Tinsert(ct, "body_b", HOFFSET(cd_event, body_b), H5T_NATIVE_INT);
+    H5Tinsert(ct, "x", HOFFSET(cd_event, x), H5T_NATIVE_DOUBLE);
+    H5Tinsert(ct, "fn", HOFFSET(cd_event, fn), H5T_NATIVE_DOUBLE);
+    H5Tinsert(ct, "ft", HOFFSET(cd_event, ft), H5T_NATIVE_DOUBLE);
+    fs = H5Dget_space(ds);
+    H5Sselect_hyperslab(fs, H5S_SELECT_SET, &off, NULL, &cnt, NULL);
+    ms = H5Screate_simple(1, &cnt, NULL);
+    rc = H5Dread(ds, ct, ms, fs, H5P_DEFAULT, ev);
+    H5Sclose(ms);
+    H5Sclose(fs);
+    H5Tclose(ct);
+    if (kt >= 0) H5Tclose(kt);
+    if (mt >= 0) H5Tclose(mt);
+    H5Tclose(ft);
+    H5Dclose(ds);
+    quiet_end(&q);
+    if (rc < 0) {
+        free(ev);
+        seterr(err, CD_EIO, "reading /events failed");
+        return NULL;
+    }
+    *n = r->nev;
+    return ev;
+}
+
+int cd_h5r_system(const cd_h5r *r, const char *name)
+{
+    int s;
+    for (s = 0; s < r->nsys; s++)
+        if (strcmp(r->sys[s].name, name) == 0 || strcmp(r->sys[s].group, name) == 0) return s;
+    return -1;
+}

@@ -1,0 +1,866 @@
+/* The capdyn command end to end (issue 4): run -> HDF5 -> info/export ->
+ * gnuplot, plus the failure paths (SIGKILL, signals, unwritable output, bad
+ * arguments, integrator failure).
+ *
+ * Environment: CAPDYN_BIN the binary (default build/capdyn), CAPDYN_ROOT the
+ * repository (default .), as `make test` sets them. Each test works in its
+ * own temporary directory. */
+#define _POSIX_C_SOURCE 200809L
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include <capdyn/io.h>
+#include <hdf5.h>
+#include <errno.h>
+#include <fcntl.h>
+#include <math.h>
+#include <signal.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+static const double PI = 3.14159265358979323846;
+
+/* ---- helpers ---------------------------------------------------------------- */
+static const char *bin(void)
+{
+    const char *b = getenv("CAPDYN_BIN");
+    return b && *b ? b : "build/capdyn";
+}
+static const char *root(void)
+{
+    const char *r = getenv("CAPDYN_ROOT");
+    return r && *r ? r : ".";
+}
+static void scen(char *out, size_t n, const char *name) { snprintf(out, n, "%s/scenarios/%s", root(), name); }
+
+static void make_tmpdir(char *dir, size_t n)
+{
+    snprintf(dir, n, "/tmp/capdyn_cli_XXXXXX");
+    cr_assert_not_null(mkdtemp(dir), "mkdtemp: %s", strerror(errno));
+}
+static void rm_rf(const char *dir)
+{
+    char cmd[600];
+    if (getenv("CAPDYN_KEEP_TEST_FILES")) return;
+    snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);
+    if (system(cmd) != 0) cr_log_warn("could not remove %s", dir);
+}
+
+static char *slurp(const char *path)
+{
+    FILE *f = fopen(path, "rb");
+    char *s;
+    long n;
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    s = malloc((size_t)n + 1);
+    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); s = NULL; }
+    if (s) s[n] = 0;
+    fclose(f);
+    return s;
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static void sleep_s(double s)
+{
+    struct timespec ts;
+    ts.tv_sec = (time_t)s;
+    ts.tv_nsec = (long)((s - (double)ts.tv_sec) * 1e9);
+    nanosleep(&ts, NULL);
+}
+
+/* Starts argv (NULL-terminated) with stdout/stderr into dir/out.txt,
+ * dir/err.txt; env entries "K=V" are set in the child. Returns the pid. */
+static pid_t spawn(const char *dir, char *const argv[], char *const env[])
+{
+    char o[512], e[512];
+    pid_t pid;
+    snprintf(o, sizeof o, "%s/out.txt", dir);
+    snprintf(e, sizeof e, "%s/err.txt", dir);
+    fflush(NULL);
+    pid = fork();
+    cr_assert(pid >= 0, "fork: %s", strerror(errno));
+    if (pid == 0) {
+        int fo = open(o, O_WRONLY | O_CREAT | O_TRUNC, 0644), fe = open(e, O_WRONLY | O_CREAT | O_TRUNC, 0644), i;
+        if (fo < 0 || fe < 0) _exit(126);
+        dup2(fo, 1);
+        dup2(fe, 2);
+        for (i = 0; env && env[i]; i++) {
+            char *eq = strchr(env[i], '=');
+            if (!eq) continue;
+            *eq = 0;
+            setenv(env[i], eq + 1, 1);
+        }
+        execv(argv[0], argv);
+        _exit(127);
+    }
+    return pid;
+}
+
+static int wait_status(pid_t pid)
+{
+    int st;
+    cr_assert_eq(waitpid(pid, &st, 0), pid);
+    if (WIFEXITED(st)) return WEXITSTATUS(st);
+    return 128 + WTERMSIG(st);
+}
+
+/* Runs capdyn with the given arguments (NULL-terminated); returns the exit
+ * status; *out / *err (if non-NULL) receive its stdout / stderr (free them). */
+static int capdyn(const char *dir, char **out, char **err, ...)
+{
+    char *argv[64], path[512];
+    va_list ap;
+    int n = 0, st;
+    argv[n++] = (char *)bin();
+    va_start(ap, err);
+    while (n < 63 && (argv[n] = va_arg(ap, char *)) != NULL) n++;
+    va_end(ap);
+    argv[n] = NULL;
+    st = wait_status(spawn(dir, argv, NULL));
+    snprintf(path, sizeof path, "%s/out.txt", dir);
+    if (out) *out = slurp(path);
+    snprintf(path, sizeof path, "%s/err.txt", dir);
+    if (err) *err = slurp(path);
+    return st;
+}
+
+static hid_t open_ro(const char *path)
+{
+    hid_t fapl = H5Pcreate(H5P_FILE_ACCESS), f;
+    H5Pset_file_locking(fapl, 0, 1);
+    H5E_BEGIN_TRY { f = H5Fopen(path, H5F_ACC_RDONLY, fapl); } H5E_END_TRY;
+    H5Pclose(fapl);
+    return f;
+}
+
+/* committed_samples of a file being written, or -1 if it cannot be read now */
+static long long peek_committed(const char *path)
+{
+    long long v = -1;
+    hid_t f = open_ro(path), a;
+    if (f < 0) return -1;
+    H5E_BEGIN_TRY {
+        a = H5Aopen(f, "committed_samples", H5P_DEFAULT);
+        if (a >= 0) {
+            if (H5Aread(a, H5T_NATIVE_LLONG, &v) < 0) v = -1;
+            H5Aclose(a);
+        }
+        H5Fclose(f);
+    } H5E_END_TRY;
+    return v;
+}
+
+static long long attr_ll(hid_t obj, const char *name)
+{
+    long long v = -1;
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+    cr_assert(a >= 0, "attribute %s", name);
+    cr_assert(H5Aread(a, H5T_NATIVE_LLONG, &v) >= 0);
+    H5Aclose(a);
+    return v;
+}
+static double attr_d(hid_t obj, const char *name)
+{
+    double v = NAN;
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
+    cr_assert(a >= 0, "attribute %s", name);
+    cr_assert(H5Aread(a, H5T_NATIVE_DOUBLE, &v) >= 0);
+    H5Aclose(a);
+    return v;
+}
+static void attr_s(hid_t obj, const char *name, char *out, size_t n)
+{
+    hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t, mt;
+    char *tmp;
+    size_t sz;
+    cr_assert(a >= 0, "attribute %s", name);
+    t = H5Aget_type(a);
+    sz = H5Tget_size(t);
+    mt = H5Tcopy(t); /* the file's own string type: its character set (UTF-8) */
+    H5Tset_size(mt, sz + 1);
+    tmp = calloc(1, sz + 2);
+    cr_assert(H5Aread(a, mt, tmp) >= 0);
+    snprintf(out, n, "%s", tmp);
+    free(tmp);
+    H5Tclose(mt);
+    H5Tclose(t);
+    H5Aclose(a);
+}
+static int dims_of(hid_t f, const char *path, hsize_t d[3])
+{
+    hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
+    int r;
+    cr_assert(ds >= 0, "dataset %s", path);
+    sp = H5Dget_space(ds);
+    d[0] = d[1] = d[2] = 0;
+    r = H5Sget_simple_extent_dims(sp, d, NULL);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    return r;
+}
+static double *read_all(hid_t f, const char *path, size_t *n)
+{
+    hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
+    hssize_t np;
+    double *v;
+    cr_assert(ds >= 0, "dataset %s", path);
+    sp = H5Dget_space(ds);
+    np = H5Sget_simple_extent_npoints(sp);
+    v = malloc((size_t)(np > 0 ? np : 1) * sizeof *v);
+    if (np > 0) cr_assert(H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
+    H5Sclose(sp);
+    H5Dclose(ds);
+    *n = (size_t)np;
+    return v;
+}
+
+/* A ball of 1 kg and radius 0.1 m at 1 m/s toward a fixed wall (the plane
+ * x = 0, outward normal -x), 5 mm away; an undamped linear contact K = 1e4
+ * N/m, no gravity. Closed form (linear spring, D = 0): contact from t = 5 ms
+ * for pi sqrt(m/K) = 31.4159 ms, then the ball leaves at exactly -1 m/s. */
+static const char *ball_toml =
+    "title = \"test: undamped ball against a wall\"\n"
+    "[simulation]\n"
+    "duration = 0.06\n"
+    "gravity = [0.0, 0.0, 0.0]\n"
+    "integrator = \"rk8pd\"\n"
+    "rtol = 1e-11\n"
+    "atol = 1e-13\n"
+    "h_max = 1e-3\n"
+    "output_dt = 1e-3\n"
+    "[contact]\n"
+    "K = 1e4\n"
+    "D = 0.0\n"
+    "mu_max = 0.5\n"
+    "mu = 0.5\n"
+    "[[system]]\n"
+    "name = \"ball\"\n"
+    "base = \"free\"\n"
+    "mass = 1.0\n"
+    "inertia = [0.004, 0.004, 0.004]\n"
+    "position = [-0.105, 0.0, 0.0]\n"
+    "velocity = [1.0, 0.0, 0.0]\n"
+    "checkpoints = [[0.0, 0.0, 0.0, 0.1]]\n"
+    "[[system]]\n"
+    "name = \"wall\"\n"
+    "base = \"fixed\"\n"
+    "  [[system.shape]]\n"
+    "  name = \"face\"\n"
+    "  type = \"plane\"\n"
+    "  normal = [-1.0, 0.0, 0.0]\n"
+    "[[pair]]\n"
+    "checkpoints = \"ball\"\n"
+    "shape = \"wall/face\"\n";
+
+static void write_file(const char *path, const char *text)
+{
+    FILE *f = fopen(path, "w");
+    cr_assert_not_null(f, "%s", path);
+    fputs(text, f);
+    fclose(f);
+}
+
+/* Parses an export: the first line "# a b c" names the columns; every
+ * other non-empty line that is not a comment must have that many tokens.
+ * Returns the number of data rows (-1 on a bad row); *ncol the column count. */
+static long parse_columns(const char *text, int *ncol)
+{
+    const char *p = text, *eol;
+    long rows = 0;
+    int first = 1;
+    *ncol = 0;
+    while (*p) {
+        char line[8192];
+        size_t n;
+        int k = 0;
+        char *tok, *save;
+        eol = strchr(p, '\n');
+        n = eol ? (size_t)(eol - p) : strlen(p);
+        if (n >= sizeof line) n = sizeof line - 1;
+        memcpy(line, p, n);
+        line[n] = 0;
+        p = eol ? eol + 1 : p + n;
+        if (first) {
+            cr_assert(line[0] == '#' && line[1] == ' ', "the first line is a '# ' header: '%s'", line);
+            for (tok = strtok_r(line + 2, " ", &save); tok; tok = strtok_r(NULL, " ", &save)) (*ncol)++;
+            first = 0;
+            continue;
+        }
+        if (line[0] == '#' || line[0] == 0) continue;
+        for (tok = strtok_r(line, " \t", &save); tok; tok = strtok_r(NULL, " \t", &save)) k++;
+        if (k != *ncol) {
+            cr_log_error("row %ld has %d columns, header %d", rows, k, *ncol);
+            return -1;
+        }
+        rows++;
+    }
+    return rows;
+}
+
+/* ---- end to end ----------------------------------------------------------- */
+Test(cli, run_reads_back_shapes_and_the_impact_rebound)
+{
+    /* The ball scenario above: 0.06 s at 1 ms = 61 samples. Physical figures
+     * against the closed form of the undamped linear contact: onset at 5 ms
+     * (1e-9 s: events are located to 1e-10 s), contact duration pi/100 s
+     * (1e-8 relative), rebound velocity -1 m/s (1e-7 relative: rk8pd at
+     * rtol 1e-11; energy is conserved by the undamped spring). */
+    char dir[64], toml[256], h5[256], *out = NULL, *err = NULL, s[128];
+    hid_t f, ds, ct;
+    hsize_t d[3];
+    size_t n;
+    double *vel, *t;
+    typedef struct { double t; int kind; } ev_t;
+    ev_t ev[8];
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
+    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
+    write_file(toml, ball_toml);
+    rc = capdyn(dir, &out, &err, "run", toml, "-o", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "exit %d, stderr: %s", rc, err);
+    cr_expect(strstr(out, "status      ok") != NULL, "summary shows the status: %s", out);
+    cr_expect(strstr(out, "onset 1") && strstr(out, "separation 1"), "events by kind in the summary: %s", out);
+    cr_expect(strstr(out, "max force") != NULL);
+    cr_expect(strstr(out, "momentum") != NULL && strstr(out, "energy") != NULL);
+    free(out);
+    free(err);
+
+    f = open_ro(h5);
+    cr_assert(f >= 0, "the results file opens");
+    cr_expect_eq(attr_ll(f, "committed_samples"), 61);
+    cr_expect_eq(dims_of(f, "/time", d), 1);
+    cr_expect_eq(d[0], 61);
+    cr_expect_eq(dims_of(f, "/systems/ball/base_pos", d), 2);
+    cr_expect(d[0] == 61 && d[1] == 3);
+    cr_expect_eq(dims_of(f, "/systems/ball/base_quat", d), 2);
+    cr_expect(d[1] == 4);
+    cr_expect_eq(dims_of(f, "/systems/ball/body_x", d), 3);
+    cr_expect(d[0] == 61 && d[1] == 1 && d[2] == 3);
+    cr_expect_eq(dims_of(f, "/contacts/fn", d), 2);
+    cr_expect(d[0] == 61 && d[1] == 1);
+    cr_expect_eq(dims_of(f, "/contacts/ft", d), 3);
+    cr_expect(d[0] == 61 && d[1] == 1 && d[2] == 3);
+    cr_expect_eq(dims_of(f, "/diagnostics/kinetic_energy", d), 2);
+    cr_expect(d[0] == 61 && d[1] == 2);
+    attr_s(f, "title", s, sizeof s);
+    cr_expect_str_eq(s, "test: undamped ball against a wall");
+    attr_s(f, "capdyn_version", s, sizeof s);
+    cr_expect_str_eq(s, cd_version());
+    attr_s(f, "run_status", s, sizeof s);
+    cr_expect_str_eq(s, cd_status_string(CD_OK));
+    {
+        char *txt;
+        hid_t a = H5Aopen(f, "scenario_text", H5P_DEFAULT), ty = H5Aget_type(a), mt = H5Tcopy(ty);
+        size_t sz = H5Tget_size(ty);
+        H5Tset_size(mt, sz);
+        txt = calloc(1, sz + 1);
+        H5Aread(a, mt, txt);
+        cr_expect(strstr(txt, "checkpoints = \"ball\"") != NULL, "the scenario text is stored");
+        free(txt);
+        H5Tclose(mt);
+        H5Tclose(ty);
+        H5Aclose(a);
+    }
+    /* events: onset then separation */
+    ds = H5Dopen2(f, "/events", H5P_DEFAULT);
+    dims_of(f, "/events", d);
+    cr_assert_eq(d[0], 2, "one onset, one separation");
+    {
+        hid_t ft = H5Dget_type(ds), kt = H5Tget_member_type(ft, (unsigned)H5Tget_member_index(ft, "kind"));
+        ct = H5Tcreate(H5T_COMPOUND, sizeof(ev_t));
+        H5Tinsert(ct, "t", HOFFSET(ev_t, t), H5T_NATIVE_DOUBLE);
+        H5Tinsert(ct, "kind", HOFFSET(ev_t, kind), kt);
+        cr_assert(H5Dread(ds, ct, H5S_ALL, H5S_ALL, H5P_DEFAULT, ev) >= 0);
+        H5Tclose(kt);
+        H5Tclose(ft);
+        H5Tclose(ct);
+    }
+    H5Dclose(ds);
+    cr_expect_eq(ev[0].kind, CD_EV_ONSET);
+    cr_expect_eq(ev[1].kind, CD_EV_SEPARATION);
+    cr_expect_lt(fabs(ev[0].t - 0.005), 1e-9, "onset at %.12g s", ev[0].t);
+    cr_expect_lt(fabs((ev[1].t - ev[0].t) - PI / 100.0) / (PI / 100.0), 1e-8, "contact lasted %.12g s, closed form %.12g s",
+                 ev[1].t - ev[0].t, PI / 100.0);
+    vel = read_all(f, "/systems/ball/base_vel", &n);
+    t = read_all(f, "/time", &n);
+    cr_assert_eq(n, 61);
+    cr_expect_eq(t[60], 0.06);
+    cr_expect_lt(fabs(vel[3 * 60] + 1.0), 1e-7, "rebound velocity %.12g m/s, closed form -1", vel[3 * 60]);
+    cr_log_info("ball: onset %.12g s, contact %.12g s (exact %.12g), rebound %.12g m/s", ev[0].t, ev[1].t - ev[0].t,
+                PI / 100.0, vel[3 * 60]);
+    free(vel);
+    free(t);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(cli, free_floating_arm_conserves_momentum_in_the_file)
+{
+    /* scenarios/free_floating_arm.toml: one free-floating system, internal
+     * joint torques only, no gravity. The stored momentum stays at its start
+     * value within 1e-10 of the scale sqrt(2 M T_max) (issue 2, test 3). */
+    char dir[64], sc[512], h5[256], *out = NULL, *err = NULL;
+    hid_t f;
+    size_t n, nk, i;
+    double *P, *ke, M = 0, Tmax = 0, dP = 0, P0[3];
+    int rc, a;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "free_floating_arm.toml");
+    snprintf(h5, sizeof h5, "%s/arm.h5", dir);
+    rc = capdyn(dir, &out, &err, "run", sc, "-o", h5, "--quiet", (char *)NULL);
+    cr_assert_eq(rc, 0, "exit %d: %s", rc, err);
+    cr_expect_eq(out ? strlen(out) : 0, 0, "--quiet prints nothing on success: %s", out);
+    free(out);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    {
+        cd_error e;
+        cd_scenario *s = cd_scenario_load(sc, NULL, 0, &e);
+        cr_assert_not_null(s, "%s", e.msg);
+        cr_assert_eq(s->model->nsys, 1);
+        for (i = 0; i < (size_t)s->model->nbody; i++) M += s->model->body_mass[i];
+        cd_scenario_free(s);
+    }
+    P = read_all(f, "/diagnostics/momentum", &n);
+    ke = read_all(f, "/diagnostics/kinetic_energy", &nk);
+    cr_assert_eq(n, 3 * nk);
+    memcpy(P0, P, sizeof P0);
+    for (i = 0; i < nk; i++) {
+        double d3[3];
+        if (ke[i] > Tmax) Tmax = ke[i];
+        for (a = 0; a < 3; a++) d3[a] = P[3 * i + a] - P0[a];
+        if (sqrt(d3[0] * d3[0] + d3[1] * d3[1] + d3[2] * d3[2]) > dP) dP = sqrt(d3[0] * d3[0] + d3[1] * d3[1] + d3[2] * d3[2]);
+    }
+    cr_assert_gt(Tmax, 0, "the arm moves");
+    cr_expect_lt(dP, 1e-10 * sqrt(2 * M * Tmax), "|P - P0| = %.3e, scale %.3e", dP, sqrt(2 * M * Tmax));
+    cr_log_info("free-floating arm: |P - P0| max %.3e kg m/s, scale sqrt(2 M T) %.3e", dP, sqrt(2 * M * Tmax));
+    free(P);
+    free(ke);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(cli, export_columns_parse)
+{
+    /* Every export of the ball run: a '# ' header, then rows with exactly
+     * the header's number of columns; row counts from the file (61 samples,
+     * 2 events, 1 slot); --every 10 keeps samples 0, 10, .., 60 = 7 rows. */
+    char dir[64], toml[256], h5[256], *out = NULL;
+    int ncol, rc;
+    long rows;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
+    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
+    write_file(toml, ball_toml);
+    cr_assert_eq(capdyn(dir, NULL, NULL, "run", toml, "-o", h5, "--quiet", (char *)NULL), 0);
+#define EXPORT(expect_rows, expect_cols, ...)                                                           \
+    do {                                                                                                  \
+        rc = capdyn(dir, &out, NULL, "export", h5, __VA_ARGS__, (char *)NULL);                            \
+        cr_assert_eq(rc, 0, "export " #__VA_ARGS__ " exit %d", rc);                                     \
+        rows = parse_columns(out, &ncol);                                                                 \
+        cr_expect_eq(rows, expect_rows, "export " #__VA_ARGS__ ": %ld rows", rows);                     \
+        cr_expect_eq(ncol, expect_cols, "export " #__VA_ARGS__ ": %d columns", ncol);                   \
+        free(out);                                                                                        \
+    } while (0)
+    EXPORT(61, 1, "time");
+    EXPORT(7, 1, "time", "--every", "10");
+    EXPORT(61, 14, "system", "ball");       /* t + 3 + 4 + 3 + 3, no joints */
+    EXPORT(61, 8, "contacts");               /* t nopen nstick nslip fn_sum + 3 per slot */
+    EXPORT(61, 8, "contacts", "--active");
+    EXPORT(61, 19, "slot", "0");
+    EXPORT(1, 10, "slots");
+    EXPORT(2, 11, "events");
+    EXPORT(61, 22, "diagnostics");
+    EXPORT(61, 22, "diagnostics", "ball");
+    EXPORT(3, 10, "checkpoints", "--frames", "3");
+#undef EXPORT
+    /* outline: one frame per --at time, each a block of polylines */
+    rc = capdyn(dir, &out, NULL, "export", h5, "outline", "--at", "0,end", (char *)NULL);
+    cr_assert_eq(rc, 0);
+    rows = parse_columns(out, &ncol);
+    cr_expect_eq(ncol, 4);
+    cr_expect_gt(rows, 4, "the wall is drawn (%ld rows)", rows);
+    cr_expect(strstr(out, "# frame 1 sample 60 t 0.06") != NULL, "'end' is the last sample");
+    free(out);
+    rm_rf(dir);
+}
+
+/* ---- crash safety and signals ------------------------------------------------- */
+/* A long run of the Fig. 5 scenario (100 s simulated, several seconds of wall
+ * time) committing every 0.3 s of wall time (output every 10 ms, so the
+ * 1024-row buffer never forces extra commits). */
+static pid_t start_long_run(const char *dir, const char *h5)
+{
+    static char sc[512];
+    char *argv[16];
+    int n = 0;
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
+    argv[n++] = (char *)bin();
+    argv[n++] = (char *)"run";
+    argv[n++] = sc;
+    argv[n++] = (char *)"-o";
+    argv[n++] = (char *)h5;
+    argv[n++] = (char *)"--set";
+    argv[n++] = (char *)"simulation.duration=100";
+    argv[n++] = (char *)"--set";
+    argv[n++] = (char *)"simulation.output_dt=0.01";
+    argv[n++] = (char *)"--set";
+    argv[n++] = (char *)"simulation.flush_every=0.3";
+    argv[n] = NULL;
+    return spawn(dir, argv, NULL);
+}
+
+/* Waits until the committed counter changes to a value > 0 (a commit just
+ * finished); returns it. */
+static long long wait_for_commit(const char *h5, pid_t pid)
+{
+    double t0 = now();
+    long long c0 = -1, c;
+    while (now() - t0 < 30.0) {
+        int st;
+        cr_assert_eq(waitpid(pid, &st, WNOHANG), 0, "the run ended early");
+        c = peek_committed(h5);
+        if (c > 0 && c0 >= 0 && c != c0) return c;
+        if (c >= 0) c0 = c;
+        sleep_s(0.01);
+    }
+    cr_assert_fail("no commit within 30 s");
+    return -1;
+}
+
+Test(cli, sigkill_leaves_a_readable_file, .timeout = 60)
+{
+    /* Kill -9 a run 0.1 s after a commit (the next is due 0.3 s after it):
+     * h5dump -H reads the file, capdyn info and export work and report only
+     * the committed samples, whose times increase and stay below the end. */
+    char dir[64], h5[256], *out = NULL, *err = NULL, cmd[600];
+    pid_t pid;
+    long long seen, c;
+    hid_t f;
+    hsize_t d[3];
+    size_t n, i;
+    double *t;
+    int rc, ncol;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(h5, sizeof h5, "%s/killed.h5", dir);
+    pid = start_long_run(dir, h5);
+    seen = wait_for_commit(h5, pid);
+    sleep_s(0.1);
+    cr_assert_eq(kill(pid, SIGKILL), 0);
+    cr_assert_eq(wait_status(pid), 128 + SIGKILL);
+
+    snprintf(cmd, sizeof cmd, "h5dump -H '%s' > '%s/h5dump.txt' 2>&1", h5, dir);
+    rc = system(cmd);
+    cr_expect_eq(rc, 0, "h5dump -H reads the killed file (status %d)", rc);
+    f = open_ro(h5);
+    cr_assert(f >= 0, "HDF5 opens the killed file");
+    c = attr_ll(f, "committed_samples");
+    cr_expect_geq(c, seen, "committed %lld >= the %lld seen before the kill", c, seen);
+    dims_of(f, "/time", d);
+    cr_expect_geq((long long)d[0], c, "rows on disk %llu >= committed %lld", (unsigned long long)d[0], c);
+    t = read_all(f, "/time", &n);
+    for (i = 1; i < (size_t)c; i++) cr_assert_gt(t[i], t[i - 1], "time increases at %zu", i);
+    cr_expect_lt(t[c - 1], 100.0);
+    {
+        char s[64];
+        attr_s(f, "run_status", s, sizeof s);
+        cr_expect_str_eq(s, "running", "a killed run never wrote its final status");
+    }
+    free(t);
+    H5Fclose(f);
+
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_expect_eq(rc, 0, "capdyn info on the killed file: %s", err);
+    cr_expect(out && strstr(out, "unfinished") != NULL, "info says the run did not finish: %s", out);
+    free(out);
+    free(err);
+    rc = capdyn(dir, &out, NULL, "export", h5, "time", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect_eq(parse_columns(out, &ncol), c, "export gives the committed samples only");
+    free(out);
+    cr_log_info("SIGKILL: %lld samples committed, file readable", c);
+    rm_rf(dir);
+}
+
+static void signal_stops_cleanly(int sig)
+{
+    /* SIGINT / SIGTERM: the run stops at the next step, appends its last
+     * state, closes the file with status "interrupted" and exits 130. */
+    char dir[64], h5[256], s[128], *err;
+    pid_t pid;
+    hid_t f;
+    hsize_t d[3];
+    size_t n;
+    double *t, tf;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(h5, sizeof h5, "%s/stopped.h5", dir);
+    pid = start_long_run(dir, h5);
+    wait_for_commit(h5, pid);
+    cr_assert_eq(kill(pid, sig), 0);
+    rc = wait_status(pid);
+    snprintf(s, sizeof s, "%s/err.txt", dir);
+    err = slurp(s);
+    cr_expect_eq(rc, 130, "exit status %d; stderr: %s", rc, err);
+    cr_expect(err && strstr(err, sig == SIGINT ? "SIGINT" : "SIGTERM"), "stderr names the signal: %s", err);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    attr_s(f, "run_status", s, sizeof s);
+    cr_expect_str_eq(s, cd_status_string(CD_EINTERRUPT));
+    dims_of(f, "/time", d);
+    cr_expect_eq((long long)d[0], attr_ll(f, "committed_samples"), "a closed file has every row committed");
+    t = read_all(f, "/time", &n);
+    tf = attr_d(f, "t_final");
+    cr_expect_eq(t[n - 1], tf, "the last sample is the state where it stopped (%.9g vs %.9g)", t[n - 1], tf);
+    cr_expect_lt(tf, 100.0);
+    free(t);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(cli, sigint_stops_cleanly, .timeout = 60) { signal_stops_cleanly(SIGINT); }
+Test(cli, sigterm_stops_cleanly, .timeout = 60) { signal_stops_cleanly(SIGTERM); }
+
+/* ---- failures ------------------------------------------------------------------- */
+Test(cli, unwritable_output_fails_before_the_run)
+{
+    /* A 1000 s run into a directory that does not exist: exit 1 within 5 s
+     * (a run would take minutes), the message names the path, nothing made. */
+    char dir[64], sc[512], *err = NULL;
+    const char *bad = "/nonexistent_capdyn_dir/sub/out.h5";
+    double t0;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
+    t0 = now();
+    rc = capdyn(dir, NULL, &err, "run", sc, "-o", bad, "--set", "simulation.duration=1000", (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d", rc);
+    cr_expect_lt(now() - t0, 5.0, "failed before running");
+    cr_expect(err && strncmp(err, "capdyn: error: ", 15) == 0, "stderr: %s", err);
+    cr_expect(err && strstr(err, bad) != NULL, "the message names the path: %s", err);
+    cr_expect(err && strchr(err, '\n') == err + strlen(err) - 1, "one line: %s", err);
+    cr_expect_neq(access(bad, F_OK), 0);
+    free(err);
+    /* a path whose parent is a regular file */
+    {
+        char badf[300];
+        snprintf(badf, sizeof badf, "%s/err.txt/out.h5", dir);
+        rc = capdyn(dir, NULL, &err, "run", sc, "-o", badf, (char *)NULL);
+        cr_expect_eq(rc, 1);
+        free(err);
+    }
+    rm_rf(dir);
+}
+
+Test(cli, integrator_failure_keeps_the_data)
+{
+    /* max_steps = 10 per sample interval: the Fig. 5 run fails with
+     * CD_EMAXSTEPS once the contacts need more steps. Exit 1 with one
+     * 'capdyn: error:' line; the file is closed with that status and keeps
+     * the samples before the failure plus the last good state. */
+    char dir[64], sc[512], h5[256], s[300], *err = NULL;
+    hid_t f;
+    hsize_t d[3];
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
+    snprintf(h5, sizeof h5, "%s/fail.h5", dir);
+    rc = capdyn(dir, NULL, &err, "run", sc, "-o", h5, "--quiet", "--set", "simulation.max_steps=10", (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
+    cr_expect(err && strstr(err, "capdyn: error: run failed") != NULL, "stderr: %s", err);
+    cr_expect(err && strstr(err, h5) != NULL, "stderr says where the data is: %s", err);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    attr_s(f, "run_status", s, sizeof s);
+    cr_expect_str_eq(s, cd_status_string(CD_EMAXSTEPS));
+    attr_s(f, "run_message", s, sizeof s);
+    cr_expect(strstr(s, "max_steps") != NULL, "message: %s", s);
+    dims_of(f, "/time", d);
+    cr_expect_gt(d[0], 10, "samples before the failure are kept (%llu)", (unsigned long long)d[0]);
+    cr_expect_lt(attr_d(f, "t_final"), 2.0);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(cli, bad_arguments_exit_2_runtime_errors_exit_1)
+{
+    /* Usage errors: exit 2 and one "capdyn: error:" line. Runtime errors
+     * (missing files): exit 1. --help/--version: exit 0 on stdout. */
+    char dir[64], *out = NULL, *err = NULL, sc[512], h5[256], toml[256];
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
+    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
+    write_file(toml, ball_toml);
+    cr_assert_eq(capdyn(dir, NULL, NULL, "run", toml, "-o", h5, "--quiet", (char *)NULL), 0);
+#define USAGE(...)                                                                           \
+    do {                                                                                     \
+        rc = capdyn(dir, NULL, &err, __VA_ARGS__, (char *)NULL);                            \
+        cr_expect_eq(rc, 2, #__VA_ARGS__ ": exit %d", rc);                                   \
+        cr_expect(err && strncmp(err, "capdyn: error: ", 15) == 0, #__VA_ARGS__ ": %s", err); \
+        free(err);                                                                           \
+    } while (0)
+    rc = capdyn(dir, NULL, NULL, (char *)NULL);
+    cr_expect_eq(rc, 2, "no command: exit %d", rc);
+    USAGE("frobnicate");
+    USAGE("--frobnicate");
+    USAGE("run");
+    USAGE("run", sc, "--bogus");
+    USAGE("run", sc, "-o");
+    USAGE("run", sc, "--set", "novalue");
+    USAGE("run", sc, sc);
+    USAGE("check");
+    USAGE("info");
+    USAGE("export", h5);
+    USAGE("export", h5, "nonsense");
+    USAGE("export", h5, "slot");
+    USAGE("export", h5, "time", "--every", "0");
+    USAGE("export", h5, "time", "--view", "xq");
+    USAGE("export", h5, "outline", "--at", "zero");
+#undef USAGE
+    rc = capdyn(dir, &out, NULL, "--help", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect(out && strstr(out, "usage: capdyn") != NULL);
+    free(out);
+    rc = capdyn(dir, &out, NULL, "export", "--help", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect(out && strstr(out, "usage: capdyn export") != NULL);
+    free(out);
+    rc = capdyn(dir, &out, NULL, "--version", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    {
+        char want[64];
+        snprintf(want, sizeof want, "capdyn %s\n", cd_version());
+        cr_expect_str_eq(out, want);
+    }
+    free(out);
+    rc = capdyn(dir, NULL, &err, "info", "/nonexistent/file.h5", (char *)NULL);
+    cr_expect_eq(rc, 1, "missing results file: exit %d", rc);
+    cr_expect(err && strstr(err, "/nonexistent/file.h5"), "%s", err);
+    free(err);
+    rc = capdyn(dir, NULL, &err, "info", toml, (char *)NULL);
+    cr_expect_eq(rc, 1, "not an HDF5 file: exit %d", rc);
+    free(err);
+    rc = capdyn(dir, NULL, &err, "export", h5, "system", "nosuch", (char *)NULL);
+    cr_expect_eq(rc, 1, "unknown system: exit %d", rc);
+    free(err);
+    rc = capdyn(dir, NULL, &err, "run", "/nonexistent/scenario.toml", (char *)NULL);
+    cr_expect_eq(rc, 1, "missing scenario: exit %d", rc);
+    free(err);
+    rm_rf(dir);
+}
+
+Test(cli, check_prints_the_model_summary)
+{
+    /* capdyn check: exit 0 and one OK line whose counts are the model's
+     * (cd_scenario_load of the same file); --set applies. */
+    char dir[64], sc[512], want[128], *out = NULL;
+    cd_error e;
+    cd_scenario *s;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
+    s = cd_scenario_load(sc, NULL, 0, &e);
+    cr_assert_not_null(s, "%s", e.msg);
+    rc = capdyn(dir, &out, NULL, "check", sc, "--set", "simulation.duration=0.5", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect(out && strstr(out, ": OK: ") != NULL, "%s", out);
+    snprintf(want, sizeof want, "%d contact slots, state size %d; 0.5 s", s->model->nslot, s->model->ny);
+    cr_expect(out && strstr(out, want) != NULL, "'%s' in '%s'", want, out);
+    cr_expect(out && strchr(out, '\n') == out + strlen(out) - 1, "one line");
+    free(out);
+    cd_scenario_free(s);
+    rm_rf(dir);
+}
+
+/* ---- figures ---------------------------------------------------------------------- */
+static long file_size(const char *path)
+{
+    struct stat st;
+    return stat(path, &st) == 0 ? (long)st.st_size : -1;
+}
+
+static int starts_with(const char *path, const char *magic, size_t n)
+{
+    char buf[16] = {0};
+    FILE *f = fopen(path, "rb");
+    size_t got;
+    if (!f) return 0;
+    got = fread(buf, 1, n, f);
+    fclose(f);
+    return got == n && memcmp(buf, magic, n) == 0;
+}
+
+Test(cli, figures_script_renders_nonempty_images, .timeout = 120)
+{
+    /* plots/figures.sh (what `make figures` runs) on shortened runs
+     * (CAPDYN_RUN_ARGS sets the duration to 0.12 s): every figure exists,
+     * PNGs carry the PNG signature and more than 5 kB, SVGs are SVG text,
+     * the animation is a GIF. */
+    static const char *pngs[] = {"fig3_force", "fig3_force_first_strike", "fig3_diagnostics", "fig5_force",
+                                 "fig5_force_closing", "fig5_snapshots", "fig5_diagnostics"};
+    char dir[64], script[512], figdir[300], p[400], env1[400], env2[320], env3[600];
+    char *argv[3], *env[4];
+    size_t i;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(script, sizeof script, "%s/plots/figures.sh", root());
+    snprintf(figdir, sizeof figdir, "%s/figures", dir);
+    snprintf(env1, sizeof env1, "FIGURES_DIR=%s", figdir);
+    snprintf(env2, sizeof env2, "CAPDYN_RUN_ARGS=--set simulation.duration=0.12");
+    if (bin()[0] == '/') snprintf(env3, sizeof env3, "CAPDYN=%s", bin());
+    else {
+        char cwd[400];
+        cr_assert_not_null(getcwd(cwd, sizeof cwd));
+        snprintf(env3, sizeof env3, "CAPDYN=%s/%s", cwd, bin());
+    }
+    env[0] = env1;
+    env[1] = env2;
+    env[2] = env3;
+    env[3] = NULL;
+    argv[0] = (char *)"/bin/bash";
+    argv[1] = script;
+    argv[2] = NULL;
+    rc = wait_status(spawn(dir, argv, env));
+    if (rc != 0) {
+        char ep[300], *err;
+        snprintf(ep, sizeof ep, "%s/err.txt", dir);
+        err = slurp(ep);
+        cr_assert_fail("figures.sh exit %d: %s", rc, err);
+    }
+    for (i = 0; i < sizeof pngs / sizeof *pngs; i++) {
+        snprintf(p, sizeof p, "%s/%s.png", figdir, pngs[i]);
+        cr_expect(starts_with(p, "\x89PNG", 4), "%s is a PNG", p);
+        cr_expect_gt(file_size(p), 5000, "%s: %ld bytes", p, file_size(p));
+        snprintf(p, sizeof p, "%s/%s.svg", figdir, pngs[i]);
+        {
+            char *svg = slurp(p);
+            cr_expect(svg && strstr(svg, "<svg") != NULL, "%s is SVG", p);
+            free(svg);
+        }
+    }
+    snprintf(p, sizeof p, "%s/fig5_grasp.gif", figdir);
+    cr_expect(starts_with(p, "GIF89a", 6), "%s is a GIF", p);
+    cr_expect_gt(file_size(p), 5000);
+    rm_rf(dir);
+}
