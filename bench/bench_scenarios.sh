@@ -6,9 +6,14 @@ out=$(mktemp -d)
 trap 'rm -rf "$out"' EXIT
 for s in scenarios/paper_fig3_impact.toml scenarios/paper_fig5_envelope_grasp.toml; do
   [ -f "$s" ] || continue
-  start=$(date +%s.%N)
-  build/capdyn run "$s" -o "$out/r.h5" --quiet > "$out/summary.txt"
-  end=$(date +%s.%N)
-  printf '\n%s: %.2f s wall\n' "$s" "$(echo "$end - $start" | bc -l)"
-  grep -Ei 'rhs|steps|events' "$out/summary.txt" | sed 's/^/  /' || true
+  best=""
+  for rep in 1 2 3; do
+    start=$(date +%s%N)
+    build/capdyn run "$s" -o "$out/r.h5" --quiet > "$out/summary.txt"
+    end=$(date +%s%N)
+    ms=$(( (end - start) / 1000000 ))
+    if [ -z "$best" ] || [ "$ms" -lt "$best" ]; then best=$ms; fi
+  done
+  printf '\n%s: best of 3 runs %d ms wall (including HDF5 output)\n' "$s" "$best"
+  grep -E '^(events|integrator)' "$out/summary.txt" | sed 's/^/  /' || true
 done

@@ -35,6 +35,15 @@ typedef struct {
     char msg[512];
 } cd_error;
 
+/* Fills err (if non-NULL) with status st and a printf-style message
+ * (truncated to the buffer). For the library's layers and for callers that
+ * report through the same struct. */
+void cd_error_set(cd_error *err, cd_status st, const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 3, 4)))
+#endif
+    ;
+
 /* Human-readable name of a status ("ok", "invalid argument", ...). */
 const char *cd_status_string(cd_status s);
 /* Library version, e.g. "0.1.0". */

@@ -25,6 +25,7 @@
 #include "../math/cd_math.h"
 
 #include <hdf5.h>
+#include "h5_util.h"
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -80,24 +81,8 @@ struct cd_h5_writer {
 };
 
 /* ---- error plumbing --------------------------------------------------------- */
-typedef struct { H5E_auto2_t func; void *data; } h5_quiet;
 
-static void quiet_begin(h5_quiet *q)
-{
-    (void)H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
-    (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-}
-static void quiet_end(const h5_quiet *q) { (void)H5Eset_auto2(H5E_DEFAULT, q->func, q->data); }
-
-static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
-{
-    va_list ap;
-    if (!err) return;
-    err->status = st;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
-}
+#define seterr cd_error_set
 
 /* ---- attributes ---------------------------------------------------------------- */
 static hid_t str_type(size_t len)
@@ -821,7 +806,7 @@ static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenari
 cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err)
 {
     cd_h5_writer *w;
-    h5_quiet q;
+    cd_h5_quiet q;
     struct stat st;
     int existed;
     FILE *probe;
@@ -860,10 +845,10 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         seterr(err, CD_ENOMEM, "out of memory");
         return NULL;
     }
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     w->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
     if (w->file < 0) {
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         writer_free(w);
         if (!existed) remove(path);
         seterr(err, CD_EIO, "cannot create results file '%s': HDF5 refused to create it", path);
@@ -873,12 +858,12 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         create_layout(w, m) < 0 || alloc_buffers(w) < 0 ||
         H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
         writer_free(w);
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         remove(path);
         seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full or HDF5 error)", path);
         return NULL;
     }
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return w;
 }
 
@@ -990,11 +975,11 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     }
     w->nbuf++;
     if (w->nbuf == w->cap_rows) {
-        h5_quiet q;
+        cd_h5_quiet q;
         cd_status st;
-        quiet_begin(&q);
+        cd_h5_quiet_begin(&q);
         st = commit(w, err);
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         return st;
     }
     return CD_OK;
@@ -1002,27 +987,27 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
 
 cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err)
 {
-    h5_quiet q;
+    cd_h5_quiet q;
     cd_status st;
     if (!w) {
         seterr(err, CD_EINVAL, "cd_h5_flush: NULL writer");
         return CD_EINVAL;
     }
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     st = commit(w, err);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return st;
 }
 
 cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,
                       const char *message, cd_error *err)
 {
-    h5_quiet q;
+    cd_h5_quiet q;
     cd_status st = CD_OK;
     hid_t f;
     int rc = 0;
     if (!w) return CD_OK;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     f = w->file;
     /* the last events (logged after the last sample) still belong in the table */
     if (d && m && !w->failed && take_events(w, d) < 0) rc = -1;
@@ -1057,6 +1042,6 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
         st = commit(w, err);
     }
     writer_free(w);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return st;
 }

@@ -6,28 +6,14 @@
 #include "h5_read.h"
 
 #include <hdf5.h>
+#include "h5_util.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-typedef struct { H5E_auto2_t func; void *data; } quiet_t;
-static void quiet_begin(quiet_t *q)
-{
-    (void)H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
-    (void)H5Eset_auto2(H5E_DEFAULT, NULL, NULL);
-}
-static void quiet_end(const quiet_t *q) { (void)H5Eset_auto2(H5E_DEFAULT, q->func, q->data); }
 
-static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
-{
-    va_list ap;
-    if (!err) return;
-    err->status = st;
-    va_start(ap, fmt);
-    vsnprintf(err->msg, sizeof err->msg, fmt, ap);
-    va_end(ap);
-}
+#define seterr cd_error_set
 
 #define FID(r) ((hid_t)(r)->id)
 
@@ -79,11 +65,11 @@ static int read_table(hid_t f, const char *path, hid_t mt, long n, void *out)
 
 int cd_h5r_exists(const cd_h5r *r, const char *path)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     htri_t e;
     const char *p;
     char buf[512];
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     /* H5Lexists needs every intermediate link to exist: walk the path */
     e = 1;
     p = path + 1;
@@ -97,17 +83,17 @@ int cd_h5r_exists(const cd_h5r *r, const char *path)
         if (!s) break;
         p = s + 1;
     }
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return e > 0;
 }
 
 char *cd_h5r_attr_str(const cd_h5r *r, const char *obj, const char *name)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t a, t, mt;
     char *s = NULL;
     size_t n;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     a = H5Aopen_by_name(FID(r), obj, name, H5P_DEFAULT, H5P_DEFAULT);
     if (a >= 0) {
         t = H5Aget_type(a);
@@ -122,20 +108,20 @@ char *cd_h5r_attr_str(const cd_h5r *r, const char *obj, const char *name)
         H5Tclose(t);
         H5Aclose(a);
     }
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return s;
 }
 
 char *cd_h5r_text(const cd_h5r *r, const char *name)
 {
     char *s = cd_h5r_attr_str(r, "/", name), path[256];
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t ds;
     if (!s || strncmp(s, "@dataset /", 10) != 0) return s;
     free(s);
     s = NULL;
     snprintf(path, sizeof path, "/%s", name);
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
     if (ds >= 0) {
         hid_t sp = H5Dget_space(ds);
@@ -145,16 +131,16 @@ char *cd_h5r_text(const cd_h5r *r, const char *name)
         H5Sclose(sp);
         H5Dclose(ds);
     }
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return s;
 }
 
 static int attr_num(const cd_h5r *r, const char *obj, const char *name, hid_t mt, void *v, int n)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t a, sp;
     int rc = -1;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     a = H5Aopen_by_name(FID(r), obj, name, H5P_DEFAULT, H5P_DEFAULT);
     if (a >= 0) {
         sp = H5Aget_space(a);
@@ -162,7 +148,7 @@ static int attr_num(const cd_h5r *r, const char *obj, const char *name, hid_t mt
         H5Sclose(sp);
         H5Aclose(a);
     }
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     return rc;
 }
 int cd_h5r_attr_f64(const cd_h5r *r, const char *obj, const char *name, double *v)
@@ -241,11 +227,11 @@ static herr_t sys_cb(hid_t g, const char *name, const H5L_info_t *info, void *op
 
 void cd_h5r_close(cd_h5r *r)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     if (!r) return;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     if (r->id >= 0) H5Fclose(FID(r));
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     free(r->sys);
     free(r->body);
     free(r->cp);
@@ -350,18 +336,18 @@ static int read_static(cd_h5r *r)
 
 cd_h5r *cd_h5r_open(const char *path, cd_error *err)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t fapl, f;
     cd_h5r *r;
     long long c = -1;
     long rows;
     char *fmt;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     fapl = H5Pcreate(H5P_FILE_ACCESS);
     H5Pset_file_locking(fapl, 0, 1);
     f = H5Fopen(path, H5F_ACC_RDONLY, fapl);
     H5Pclose(fapl);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     if (f < 0) {
         FILE *probe = fopen(path, "rb");
         if (!probe) seterr(err, CD_EIO, "cannot open '%s': no such file or not readable", path);
@@ -386,24 +372,24 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
         return NULL;
     }
     free(fmt);
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     rows = table_rows(f, "/time");
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     r->nrows = rows > 0 ? rows : 0;
     r->n = r->nrows;
     if (cd_h5r_attr_i64(r, "/", "committed_samples", &c) == 0 && c >= 0 && c < r->n) r->n = (long)c;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     rows = table_rows(f, "/events");
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     r->nev = rows > 0 ? rows : 0;
     c = -1;
     if (cd_h5r_attr_i64(r, "/", "committed_events", &c) == 0 && c >= 0 && c < r->nev) r->nev = (long)c;
     c = 0;
     cd_h5r_attr_i64(r, "/events", "lost", &c);
     r->ev_lost = c;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     rows = read_static(r);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     if (rows < 0) {
         cd_h5r_close(r);
         seterr(err, CD_EIO, "'%s': the model tables (/systems, /model, /contacts/slots) are missing or damaged", path);
@@ -414,16 +400,16 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
 
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t ds, fs, ms;
     hsize_t d[4] = {0, 0, 0, 0}, off[4] = {0, 0, 0, 0}, cnt[4];
     int rank, i;
     size_t rl = 1;
     double *v = NULL;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
     if (ds < 0) {
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         seterr(err, CD_EIO, "no dataset %s in the results file", path);
         return NULL;
     }
@@ -432,7 +418,7 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
     if (rank < 1 || rank > 4 || (long)d[0] < r->n) {
         H5Sclose(fs);
         H5Dclose(ds);
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         seterr(err, CD_EIO, "dataset %s is shorter than the committed sample count", path);
         return NULL;
     }
@@ -451,7 +437,7 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
     }
     H5Sclose(fs);
     H5Dclose(ds);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     if (!v) {
         seterr(err, CD_EIO, "reading %s failed", path);
         return NULL;
@@ -462,7 +448,7 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
 
 cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
 {
-    quiet_t q;
+    cd_h5_quiet q;
     hid_t ds, fs, ms, ft, ct, kt, mt;
     hsize_t off = 0, cnt = (hsize_t)r->nev;
     cd_event *ev = calloc((size_t)(r->nev ? r->nev : 1), sizeof *ev);
@@ -474,10 +460,10 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
         return NULL;
     }
     if (r->nev == 0) return ev;
-    quiet_begin(&q);
+    cd_h5_quiet_begin(&q);
     ds = H5Dopen2(FID(r), "/events", H5P_DEFAULT);
     if (ds < 0) {
-        quiet_end(&q);
+        cd_h5_quiet_end(&q);
         free(ev);
         seterr(err, CD_EIO, "no /events table");
         return NULL;
@@ -519,7 +505,7 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
     if (mt >= 0) H5Tclose(mt);
     H5Tclose(ft);
     H5Dclose(ds);
-    quiet_end(&q);
+    cd_h5_quiet_end(&q);
     if (rc < 0) {
         free(ev);
         seterr(err, CD_EIO, "reading /events failed");

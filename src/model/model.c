@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
+void cd_error_set(cd_error *err, cd_status st, const char *fmt, ...)
 {
     va_list ap;
     if (!err) return;
@@ -17,6 +17,7 @@ static void seterr(cd_error *err, cd_status st, const char *fmt, ...)
     vsnprintf(err->msg, sizeof err->msg, fmt, ap);
     va_end(ap);
 }
+#define seterr cd_error_set
 
 const char *cd_status_string(cd_status s)
 {
