@@ -15,5 +15,5 @@ for s in scenarios/paper_fig3_impact.toml scenarios/paper_fig5_envelope_grasp.to
     if [ -z "$best" ] || [ "$ms" -lt "$best" ]; then best=$ms; fi
   done
   printf '\n%s: best of 3 runs %d ms wall (including HDF5 output)\n' "$s" "$best"
-  grep -E '^(events|integrator)' "$out/summary.txt" | sed 's/^/  /' || true
+  build/capdyn info "$out/r.h5" | grep -E "^(events|integrator)" | sed "s/^/  /" || true
 done
