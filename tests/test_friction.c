@@ -454,3 +454,47 @@ Test(friction, shrinking_cone_slips_once_without_chatter)
     cd_data_free(d);
     cd_model_free(m);
 }
+
+Test(friction, sticking_pair_turning_together_keeps_its_force_in_the_body_frame)
+{
+    /* Two 1e15 kg bodies in stick contact spin together at 1 rad/s about the
+     * contact normal (world z): no relative motion, so the held tangential
+     * force must turn with them. The anchor is kept in the axes of the
+     * shape's body: after a quarter turn the force, seen from that body, is
+     * still -1 N along its x (it was -1 N along world x = body x at t = 0),
+     * within 1e-9 N; in world axes it has turned to -1 N along y. */
+    cd_model *m = cd_model_create();
+    cd_data *d;
+    cd_error e;
+    double pA[3] = {0, 0, -1e-6}, w[3] = {0, 0, 1.0}, fb[3];
+    int A, B, sh, lid;
+    const double *R, *f;
+    B = add_system(m, "plate", CD_BASE_FREE, 1e15, 1e15, NULL, NULL, w);
+    A = add_system(m, "pin", CD_BASE_FREE, 1e15, 1e15, pA, NULL, w);
+    sh = add_plane(m, m->sys_body_adr[B]);
+    add_point(m, m->sys_body_adr[A]);
+    {
+        cd_contact_law law = cd_contact_law_default();
+        law.K = law.Kt = 1e5;
+        law.D = law.Dt = 0;
+        law.mu_s = law.mu_k = 100; /* it must stick */
+        lid = cd_model_add_law(m, &law, &e);
+    }
+    cr_assert(cd_model_add_pair(m, A, -1, sh, lid, &e) >= 0, "%s", e.msg);
+    finalize(m);
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(d->slot_mode[0], CD_MODE_STICK);
+    d->y[m->ny_slot_adr] = 1e-5; /* f_t = -K_t z = -1 N along x */
+    cr_assert_eq(cd_sim_advance(m, d, 0.5 * M_PI, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_eq(d->slot_mode[0], CD_MODE_STICK);
+    R = d->body_R + 9 * m->sys_body_adr[B];
+    f = d->slot_ft;
+    fb[0] = R[0] * f[0] + R[3] * f[1] + R[6] * f[2];
+    fb[1] = R[1] * f[0] + R[4] * f[1] + R[7] * f[2];
+    fb[2] = R[2] * f[0] + R[5] * f[1] + R[8] * f[2];
+    cr_expect_lt(fabs(fb[0] + 1.0) + fabs(fb[1]) + fabs(fb[2]), 1e-9, "body frame (%g %g %g)", fb[0], fb[1], fb[2]);
+    cr_expect_lt(fabs(f[0]) + fabs(f[1] + 1.0), 1e-9, "world (%g %g %g)", f[0], f[1], f[2]);
+    cd_data_free(d);
+    cd_model_free(m);
+}

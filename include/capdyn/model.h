@@ -98,6 +98,9 @@ typedef struct {
 
 /* The defaults listed above. */
 cd_options cd_options_default(void);
+/* CD_OK if every option is in range (checked again by cd_data_create, since
+ * m->opt may be edited after finalize), else CD_EINVAL with err filled. */
+cd_status cd_options_check(const cd_options *o, cd_error *err);
 
 /* ---- contact law ---------------------------------------------------------- */
 /* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3), never pulling.
@@ -169,7 +172,7 @@ typedef struct cd_model {
     int nsys, nbody, ncp, nshape, nvert, nlaw, npair, nslot, ntbl;
     int nv;               /* generalized velocities, all systems */
     int ny;               /* continuous state size (see docs/dynamics.md) */
-    int ny_slot_adr;      /* where the per-slot tangential anchors start in y */
+    int ny_slot_adr;      /* where the per-slot tangential deflections start in y (3 each, shape-body axes) */
     int finalized;
     double gravity[3];    /* [m/s^2], world */
     cd_options opt;

@@ -7,7 +7,9 @@
  *   v_rel = v_A(c) - v_B(c)                 relative velocity of the two bodies at c
  *   xdot  = -v_rel . n,  v_t = v_rel - (v_rel . n) n
  *   f_raw = K x^p + D xdot^q                eq. (3), x^p := |x|^p sign(x), same for xdot^q
- *   stick: f_t = -(K_t z_t + D_t v_t)       eq. (4), z the anchor (in y), zdot = v_t
+ *   stick: f_t = -(K_t z_t + D_t v_t)       eq. (4), z the anchor deflection, kept in y
+ *          in the axes of the shape's body B (z_B, z = R_B z_B, zdot_B = R_B^T v_t) so
+ *          that a sticking pair turning together carries its held force along
  *   slip:  f_t = -mu_k f_n u/|u|, u = v_a + 2 v_reg s_t   eq. (5)
  * where s_t is the slip direction anchored at the last event (projected on
  * the tangent plane) and v_a the slip velocity. The contact point's motion
@@ -136,12 +138,13 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         if (mode != CD_MODE_OPEN) {
             fn = fraw; /* >= 0 between events: separation is located where it reaches 0 */
             if (mode == CD_MODE_STICK) {
-                double zt[3];
-                tangential(zt, z, n);
+                double zw[3], zt[3];
+                cd_m3_mulv(zw, d->body_R + 9 * bb, z);
+                tangential(zt, zw, n);
                 /* eq. (4), linear: f_t = -(K_t z_t + D_t v_t) */
                 cd_v3_scale(ft, zt, -L->Kt);
                 cd_v3_axpy(ft, -L->Dt, vt);
-                cd_v3_copy(zdot + 3 * k, vt);
+                cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
             } else {
                 double st[3], u[3], nu;
                 tangential(st, d->slot_dir + 3 * k, n);

@@ -78,6 +78,23 @@ cd_options cd_options_default(void)
     return o;
 }
 
+cd_status cd_options_check(const cd_options *o, cd_error *err)
+{
+    if (!o) { seterr(err, CD_EINVAL, "options are NULL"); return CD_EINVAL; }
+    if (o->stepper < 0 || o->stepper >= CD_STEP_NTYPES) { seterr(err, CD_EINVAL, "unknown stepper %d", (int)o->stepper); return CD_EINVAL; }
+    if (!(isfinite(o->rtol) && isfinite(o->atol) && o->rtol >= 0 && o->atol >= 0 && o->rtol + o->atol > 0)) {
+        seterr(err, CD_EINVAL, "tolerances must be finite, >= 0 and not both zero (rtol %g, atol %g)", o->rtol, o->atol);
+        return CD_EINVAL;
+    }
+    if (!(o->h_init > 0 && isfinite(o->h_init)) || !(o->h_max >= 0) || !(o->h_min >= 0) ||
+        !(o->h_fixed > 0 && isfinite(o->h_fixed)) || o->max_steps < 1 || !(o->event_tol > 0) || !(o->dwell >= 0) ||
+        !(o->v_reg > 0) || !(o->fd_eps > 0)) {
+        seterr(err, CD_EINVAL, "integrator options out of range (steps, tolerances and budgets must be positive)");
+        return CD_EINVAL;
+    }
+    return CD_OK;
+}
+
 cd_contact_law cd_contact_law_default(void)
 {
     cd_contact_law l;
@@ -621,16 +638,19 @@ int cd_model_body_id(const cd_model *m, const char *name)
  * its plane (within 1e-9 of the hull's size). Coplanar faces with more than
  * three vertices yield several overlapping triangles, which is harmless for
  * the distance query. O(n^4): meant for hulls of tens of vertices, run once.
- * With store == 0 only counts. Returns the number of faces. */
+ * With store == 0 only counts. Returns the number of faces, or -1 if all
+ * vertices lie in one plane (no volume). */
 static int hull_faces(cd_model *m, int sh, int store, int at)
 {
     const double *v = m->vert + 3 * m->shape_vert_adr[sh];
     int nv = m->shape_vert_num[sh], i, j, k, l, nf = 0;
     double size = 0, c[3] = {0, 0, 0};
+    for (i = 0; i < nv; i++) cd_v3_axpy(c, 1.0 / nv, v + 3 * i);
     for (i = 0; i < nv; i++) {
-        double r = cd_v3_norm(v + 3 * i);
+        double t[3], r;
+        cd_v3_sub(t, v + 3 * i, c);
+        r = cd_v3_norm(t);
         if (r > size) size = r;
-        cd_v3_axpy(c, 1.0 / nv, v + 3 * i);
     }
     for (i = 0; i < nv; i++)
         for (j = i + 1; j < nv; j++)
@@ -650,7 +670,8 @@ static int hull_faces(cd_model *m, int sh, int store, int at)
                     if (h < -1e-9 * size) neg = 1;
                 }
                 if (pos && neg) continue;
-                if (pos || (!neg && cd_v3_dot(n, c) - o > 0)) { cd_v3_scale(n, n, -1.0); o = -o; }
+                if (!pos && !neg) return -1; /* every vertex on this plane: a flat hull */
+                if (pos) { cd_v3_scale(n, n, -1.0); o = -o; }
                 if (store) {
                     int f = at + nf;
                     m->face_vert[3 * f] = m->shape_vert_adr[sh] + i;
@@ -677,22 +698,11 @@ static int slot_wanted(const cd_model *m, int i, int k)
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
     int s, b, i, k, nslot = 0, ny = 0, nv = 0;
-    const cd_options *o;
     if (!m) { seterr(err, CD_EINVAL, "model is NULL"); return CD_EINVAL; }
     if (m->finalized) return CD_OK;
     if (m->nsys == 0) { seterr(err, CD_EINVAL, "model has no system"); return CD_EINVAL; }
     if (!finite_n(m->gravity, 3)) { seterr(err, CD_EINVAL, "gravity is not finite"); return CD_EINVAL; }
-    o = &m->opt;
-    if (o->stepper < 0 || o->stepper >= CD_STEP_NTYPES) { seterr(err, CD_EINVAL, "unknown stepper"); return CD_EINVAL; }
-    if (!(o->rtol >= 0 && o->atol >= 0 && o->rtol + o->atol > 0)) {
-        seterr(err, CD_EINVAL, "tolerances must be >= 0 and not both zero");
-        return CD_EINVAL;
-    }
-    if (!(o->h_init > 0) || !(o->h_max >= 0) || !(o->h_min >= 0) || !(o->h_fixed > 0) || o->max_steps < 1 ||
-        !(o->event_tol > 0) || !(o->dwell >= 0) || !(o->v_reg > 0) || !(o->fd_eps > 0)) {
-        seterr(err, CD_EINVAL, "integrator options out of range (steps, tolerances and budgets must be positive)");
-        return CD_EINVAL;
-    }
+    if (cd_options_check(&m->opt, err) != CD_OK) return CD_EINVAL;
     /* layout: per system [pos block | vel block], then 3 per slot */
     for (s = 0; s < m->nsys; s++) {
         int nj = m->sys_nbody[s] - 1, base = m->sys_base_type[s] == CD_BASE_FREE ? 6 : 0;
@@ -711,6 +721,10 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     for (i = 0; i < m->npair; i++)
         for (k = 0; k < m->ncp; k++)
             if (slot_wanted(m, i, k)) nslot++;
+    free(m->slot_cp); free(m->slot_shape); free(m->slot_law);      /* a failed earlier finalize */
+    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
+    m->shape_face_adr = m->shape_face_num = m->face_vert = NULL;
+    m->face_plane = NULL;
     m->slot_cp = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
     m->slot_shape = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
     m->slot_law = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
@@ -738,7 +752,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
         if (m->shape_type[i] == CD_SHAPE_CONVEX) {
             m->shape_face_adr[i] = m->nface;
             m->shape_face_num[i] = hull_faces(m, i, 0, 0);
-            if (m->shape_face_num[i] < 4) {
+            if (m->shape_face_num[i] < 4) { /* flat (-1) or degenerate */
                 seterr(err, CD_EINVAL, "convex shape %d on body '%s': its vertices span no volume", i,
                        m->body_name[m->shape_body[i]]);
                 return CD_EINVAL;

@@ -40,6 +40,8 @@ cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
         if (err) { err->status = CD_EINVAL; snprintf(err->msg, sizeof err->msg, "model is NULL or not finalized"); }
         return NULL;
     }
+    /* m->opt may have been edited after finalize; GSL would abort on some values */
+    if (cd_options_check(&m->opt, err) != CD_OK) return NULL;
     d = calloc(1, sizeof *d);
     if (!d) goto nomem;
     for (s = 0; s < m->nsys; s++)

@@ -6,15 +6,17 @@
  * accepted step the switching functions of all slots are evaluated; if any
  * changed sign, the crossing is located by Illinois (modified regula falsi)
  * iterations, each one a single step of a one-step "locator" stepper (rk8pd;
- * rk4 in fixed-step mode) of trial length tau from the saved start state, so
+ * classic RK4 in fixed-step mode) of trial length tau from the saved start state, so
  * the located state is the integrator's own solution, not an interpolant.
  * The bracket is shrunk to event_tol; the state lands on the far end (already
  * on the new side), the modes switch, and the stepper is reset: inside a
  * segment the rhs is smooth and the adaptive control stays honest.
  *
- * Chattering guard: a slot may switch at most twice at one instant (e.g.
- * onset followed by immediate slip); after that its switching functions are
- * ignored until `dwell` seconds have passed since its last switch, and steps
+ * Chattering guard: a slot may switch at most twice in quick succession
+ * (each switch within `dwell` of the previous one: onset followed by an
+ * immediate slip at one instant, or two flips landing event_tol apart);
+ * after that its switching functions are ignored until `dwell` seconds have
+ * passed since its last switch, and steps
  * are clamped to end when a dwell expires, where the slot is re-checked and
  * switched at once if needed (counted in stats.nwarn_dwell).
  *
@@ -38,8 +40,9 @@ typedef struct {
     gsl_odeiv2_driver *drv;   /* adaptive steppers (NULL in fixed mode) */
     gsl_odeiv2_step *loc;     /* one-step locator (also the fixed-mode stepper) */
     double *y0, *ylo, *yhi, *yerr, *fd_f0, *fd_y;
+    double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
     double *g;                /* (2 nslot) switching functions scratch */
-    int *nswitch_now;         /* (nslot) switches at the current instant */
+    int *nswitch_now;         /* (nslot) switches within `dwell` of the slot's last one */
     double h;                 /* next trial step */
     int fixed;
 } cd_integ;
@@ -92,6 +95,7 @@ void cd_integ_free(void *p)
     if (I->loc) gsl_odeiv2_step_free(I->loc);
     free(I->y0); free(I->ylo); free(I->yhi); free(I->yerr); free(I->fd_f0); free(I->fd_y);
     free(I->g); free(I->nswitch_now);
+    free(I->k1); free(I->k2); free(I->k3); free(I->k4); free(I->ytmp);
     free(I);
 }
 
@@ -123,8 +127,18 @@ void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err)
                                                       m->opt.rtol, 1.0, 1.0);
         if (!I->drv) goto nomem;
     }
-    I->loc = gsl_odeiv2_step_alloc(I->fixed ? gsl_odeiv2_step_rk4 : gsl_odeiv2_step_rk8pd, n);
-    if (!I->loc) goto nomem;
+    if (I->fixed) {
+        /* GSL's rk4 stepper, asked for an error estimate, takes a full step
+         * and two half steps and returns the latter (11 evaluations for an
+         * h/2 result): the embedding mode wants the classic 4-stage RK4. */
+        I->k1 = calloc(n, sizeof(double)); I->k2 = calloc(n, sizeof(double));
+        I->k3 = calloc(n, sizeof(double)); I->k4 = calloc(n, sizeof(double));
+        I->ytmp = calloc(n, sizeof(double));
+        if (!I->k1 || !I->k2 || !I->k3 || !I->k4 || !I->ytmp) goto nomem;
+    } else {
+        I->loc = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, n);
+        if (!I->loc) goto nomem;
+    }
     I->y0 = calloc(n, sizeof(double)); I->ylo = calloc(n, sizeof(double));
     I->yhi = calloc(n, sizeof(double)); I->yerr = calloc(n, sizeof(double));
     I->fd_f0 = calloc(n, sizeof(double)); I->fd_y = calloc(n, sizeof(double));
@@ -146,7 +160,7 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     if (I->drv) {
         gsl_odeiv2_driver_reset(I->drv);
     }
-    gsl_odeiv2_step_reset(I->loc);
+    if (I->loc) gsl_odeiv2_step_reset(I->loc);
     memset(I->nswitch_now, 0, (size_t)(m->nslot ? m->nslot : 1) * sizeof(int));
 }
 
@@ -243,10 +257,13 @@ static int switch_slot(const cd_model *m, cd_data *d, int k, int forgive)
             cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);
         } else {
             int i;
+            double zw[3];
             to = CD_MODE_STICK;
             kind = CD_EV_SLIP_STICK;
-            /* anchor so that f_t is continuous: -(K_t z + D_t v_t) = f_t */
-            for (i = 0; i < 3; i++) z[i] = -(ft[i] + L->Dt * vt[i]) / L->Kt;
+            /* anchor so that f_t is continuous: -(K_t z + D_t v_t) = f_t,
+             * stored in the axes of the shape's body (see contact.c) */
+            for (i = 0; i < 3; i++) zw[i] = -(ft[i] + L->Dt * vt[i]) / L->Kt;
+            cd_m3_tmulv(z, d->body_R + 9 * m->shape_body[m->slot_shape[k]], zw);
         }
     }
     if (kind < 0) return 0;
@@ -277,8 +294,8 @@ static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *c
             if (d->slot_mode[k] == CD_MODE_STICK && gf >= -1e-9 * m->law[m->slot_law[k]].mu_s * d->slot_fn[k]) gf = 0;
             if (d->slot_mode[k] == CD_MODE_SLIP && gf >= -1e-3 * m->opt.v_reg) gf = 0;
             if (!(gn < 0 || gf < 0)) continue;
-            if (d->slot_tswitch[k] == d->t && I->nswitch_now[k] >= 2) { d->stats.nwarn_dwell++; continue; }
-            if (d->slot_tswitch[k] != d->t) I->nswitch_now[k] = 0;
+            if (d->t - d->slot_tswitch[k] < m->opt.dwell && I->nswitch_now[k] >= 2) { d->stats.nwarn_dwell++; continue; }
+            if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
             if (switch_slot(m, d, k, 1)) { I->nswitch_now[k]++; any = 1; }
         }
         if (!any) break;
@@ -304,13 +321,36 @@ void cd_integ_initial_modes(const cd_model *m, cd_data *d)
     (void)cd_forward(m, d);
 }
 
+/* Classic RK4, y advanced in place by h: 4 evaluations, no allocation. */
+static int rk4_step(cd_integ *I, double t, double h, double *y)
+{
+    size_t n = (size_t)I->m->ny, i;
+    if (rhs(t, y, I->k1, I) != GSL_SUCCESS) return GSL_EBADFUNC;
+    for (i = 0; i < n; i++) I->ytmp[i] = y[i] + 0.5 * h * I->k1[i];
+    if (rhs(t + 0.5 * h, I->ytmp, I->k2, I) != GSL_SUCCESS) return GSL_EBADFUNC;
+    for (i = 0; i < n; i++) I->ytmp[i] = y[i] + 0.5 * h * I->k2[i];
+    if (rhs(t + 0.5 * h, I->ytmp, I->k3, I) != GSL_SUCCESS) return GSL_EBADFUNC;
+    for (i = 0; i < n; i++) I->ytmp[i] = y[i] + h * I->k3[i];
+    if (rhs(t + h, I->ytmp, I->k4, I) != GSL_SUCCESS) return GSL_EBADFUNC;
+    for (i = 0; i < n; i++) y[i] += h / 6.0 * (I->k1[i] + 2.0 * I->k2[i] + 2.0 * I->k3[i] + I->k4[i]);
+    return GSL_SUCCESS;
+}
+
+/* One step of the one-step method of this run (rk8pd, or classic RK4 in
+ * fixed-step mode) of length h from (t, y), y updated in place. */
+static int one_step(cd_integ *I, double t, double h, double *y)
+{
+    if (I->fixed) return rk4_step(I, t, h, y);
+    gsl_odeiv2_step_reset(I->loc);
+    return gsl_odeiv2_step_apply(I->loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
+}
+
 /* One locator step of length tau from (t0, y0) into y; then cd_forward. */
 static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, double *y)
 {
     int st;
     memcpy(y, I->y0, (size_t)m->ny * sizeof(double));
-    gsl_odeiv2_step_reset(I->loc);
-    st = gsl_odeiv2_step_apply(I->loc, t0, tau, y, I->yerr, NULL, NULL, &I->sys);
+    st = one_step(I, t0, tau, y);
     d->stats.nlocate_steps++;
     if (st != GSL_SUCCESS) return CD_ENUMERIC;
     d->y = y;
@@ -322,10 +362,20 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
 
 /* Locate the first zero of gmin in (0, h] given gmin(0) >= 0 > gmin(h), and
  * leave d at the upper end of the final bracket (on the new side). */
-static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double h, double g_hi,
+/* Back to the start of the step after a failure: d holds the last good
+ * state (y0 at t0) with its outputs evaluated, as cd_sim_advance promises. */
+static void restore_start(const cd_model *m, cd_data *d, const cd_integ *I, double t0, double *ystate)
+{
+    d->y = ystate;
+    memcpy(d->y, I->y0, (size_t)m->ny * sizeof(double));
+    d->t = t0;
+    (void)cd_forward(m, d);
+}
+
+static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
                         int *trigger)
 {
-    double lo = 0.0, hi = h, glo, ghi = g_hi, *ystate = d->y;
+    double h = t1 - t0, lo = 0.0, hi = h, glo, ghi = g_hi, *ystate = d->y;
     int side = 0, it;
     cd_status st;
     /* g at the start (modes unchanged) */
@@ -333,7 +383,7 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     d->y = I->y0;
     d->t = t0;
     st = cd_forward(m, d);
-    if (st != CD_OK) { d->y = ystate; return st; }
+    if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     glo = gmin(m, d, I, 1, NULL);
     if (!(glo > 0)) glo = 0.0;
     for (it = 0; it < 200 && hi - lo > m->opt.event_tol; it++) {
@@ -343,7 +393,7 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
         if (!(tau > lo + 0.01 * w && tau < hi - 0.01 * w)) tau = lo + 0.5 * w;
         if (it % 4 == 3) tau = lo + 0.5 * w; /* a bisection now and then bounds the worst case */
         st = trial(m, d, I, t0, tau, I->ylo);
-        if (st != CD_OK) { d->y = ystate; return st; }
+        if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
         g = gmin(m, d, I, 1, NULL);
         if (g < 0) {
             hi = tau; ghi = g;
@@ -356,13 +406,13 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
             side = 1;
         }
     }
-    /* land at the upper end */
+    /* land at the upper end (exactly at the step's end if the bracket never moved) */
     d->y = ystate;
     memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
-    d->t = t0 + hi;
+    d->t = hi == h ? t1 : t0 + hi;
     st = cd_forward(m, d);
     d->stats.nrhs++;
-    if (st != CD_OK) return st;
+    if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     (void)gmin(m, d, I, 1, trigger);
     return CD_OK;
 }
@@ -391,7 +441,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
 {
     cd_integ *I = (cd_integ *)d->integ;
     long attempts = 0;
-    int changed;
+    int changed, need_settle = 1;
     cd_status st;
     if (!(t_end >= d->t) || !isfinite(t_end)) {
         seterr(err, CD_EINVAL, "t_end must be finite and not before the current time", d->t);
@@ -399,20 +449,26 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
     }
     while (d->t < t_end) {
         double t0 = d->t, t1 = t_end, tdw, g1;
-        int status;
-        /* re-check slots whose dwell expired (or modes invalid at the start) */
-        st = settle_modes(m, d, I, &changed);
-        if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
-        if (changed) {
-            if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
-            if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
+        int status, at_dwell_end;
+        /* modes are re-checked on entry (the caller may have edited y) and
+         * where a dwell expired; after an ordinary step the end-of-step
+         * evaluation below has already shown them consistent */
+        if (need_settle) {
+            st = settle_modes(m, d, I, &changed);
+            if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
+            need_settle = 0;
+            if (changed) {
+                if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
+                if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
+            }
         }
         tdw = next_dwell_end(m, d, I);
-        if (tdw < t1) t1 = tdw;
+        at_dwell_end = tdw <= t1;
+        if (at_dwell_end) t1 = tdw;
         memcpy(I->y0, d->y, (size_t)m->ny * sizeof(double));
         if (I->fixed) {
             double h = I->h < t1 - t0 ? I->h : t1 - t0;
-            status = gsl_odeiv2_step_apply(I->loc, t0, h, d->y, I->yerr, NULL, NULL, &I->sys);
+            status = one_step(I, t0, h, d->y);
             if (status == GSL_SUCCESS) d->t = (t1 - t0 <= I->h) ? t1 : t0 + h;
             attempts++;
         } else {
@@ -454,15 +510,16 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             return CD_ENUMERIC;
         }
         g1 = gmin(m, d, I, 1, NULL);
+        if (at_dwell_end && d->t == t1) need_settle = 1;
         if (g1 < 0) {
             int trig = -1;
-            st = locate(m, d, I, t0, d->t - t0, g1, &trig);
+            st = locate(m, d, I, t0, d->t, g1, &trig);
             if (st != CD_OK) { seterr(err, st, "event location failed", t0); return st; }
             renormalize(m, d);
             /* the slot that crossed switches unconditionally (it is on the new side) */
             if (trig >= 0) {
                 int k = trig / 2;
-                if (d->slot_tswitch[k] != d->t) I->nswitch_now[k] = 0;
+                if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
                 if (switch_slot(m, d, k, 0)) I->nswitch_now[k]++;
             }
             st = settle_modes(m, d, I, &changed);
