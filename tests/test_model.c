@@ -741,3 +741,41 @@ Test(model, names_and_defaults)
               o.h_max == 1e-2 && o.h_min == 1e-14 && o.h_fixed == 1e-5 && o.max_steps == 100000000L &&
               o.event_tol == 1e-10 && o.dwell == 1e-7 && o.v_reg == 1e-6 && o.fd_eps == 1e-7);
 }
+
+Test(model, flat_convex_hull_is_rejected)
+{
+    /* Four coplanar vertices span no volume: every vertex triple would pass
+     * the one-side test and the "hull" would act as a half-space. */
+    cd_model *m = cd_model_create();
+    cd_system_desc s = cd_system_desc_default();
+    cd_error e;
+    double sq[12] = {0, 0, 0, 1, 0, 0, 1, 1, 0, 0, 1, 0};
+    s.name = "plate";
+    s.type = CD_BASE_FIXED;
+    cr_assert(cd_model_add_system(m, &s, &e) == 0);
+    cr_assert(cd_model_add_shape(m, 0, CD_SHAPE_CONVEX, NULL, NULL, NULL, sq, 4, &e) == 0, "%s", e.msg);
+    clear(&e);
+    cr_expect_eq(cd_model_finalize(m, &e), CD_EINVAL);
+    cr_expect(strstr(e.msg, "no volume") != NULL && strstr(e.msg, "'plate'") != NULL, "message: %s", e.msg);
+    cd_model_free(m);
+}
+
+Test(model, options_edited_after_finalize_are_checked_at_data_creation)
+{
+    /* m->opt may be edited after finalize (it is how runs are configured);
+     * a negative tolerance would make GSL abort inside cd_data_create. */
+    cd_model *m = cd_model_create();
+    cd_system_desc s = cd_system_desc_default();
+    cd_error e;
+    cr_assert(cd_model_add_system(m, &s, &e) == 0);
+    cr_assert(cd_model_finalize(m, &e) == CD_OK);
+    m->opt.atol = -1;
+    clear(&e);
+    cr_expect(cd_data_create(m, 0, &e) == NULL);
+    cr_expect_eq(e.status, CD_EINVAL);
+    cr_expect(strstr(e.msg, "tolerances") != NULL, "message: %s", e.msg);
+    m->opt.atol = 1e-12;
+    m->opt.h_fixed = HUGE_VAL;
+    cr_expect(cd_data_create(m, 0, &e) == NULL, "an infinite fixed step is refused");
+    cd_model_free(m);
+}
