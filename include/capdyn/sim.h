@@ -77,6 +77,7 @@ typedef struct cd_data {
     double *body_fuser;   /* (nbody x 6) user wrench [torque about CoM; force at CoM], world */
     double *H;            /* (maxdof x maxdof) scratch for one system's mass matrix */
     double *work;         /* (4 maxdof + 12 nbody) scratch */
+    double *jwork;        /* (12 maxdof + 36) scratch of cd_generalized_jacobian */
     void *body_rbi;       /* (nbody) spatial inertias (private scratch) */
 
     /* contact slots (valid after an evaluation) */
@@ -143,6 +144,20 @@ void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H);
  * and d->body_fext as they are (call cd_forward for the full pipeline).
  * CD_ENUMERIC if a mass matrix is not positive definite. */
 cd_status cd_forward_dynamics(const cd_model *m, cd_data *d);
+
+/* Jacobian of a point fixed on `body` (p_body in the body frame), after
+ * cd_kinematics: J (6 x sys_ndof, row-major) maps the system's generalized
+ * velocities ([v0; w0; qd] for a free base, qd for a fixed one) to the
+ * point's world velocity (rows 0-2) and the body's angular velocity (rows 3-5). */
+void cd_point_jacobian(const cd_model *m, const cd_data *d, int body, const double p_body[3], double *J);
+
+/* Generalized Jacobian of a free-floating system (Umetani & Yoshida, IEEE
+ * T-RA 1989; SpaceDyn's calc_GJ), after cd_kinematics: with the system's
+ * momentum zero, the point's [v; w] = Jg qd, Jg = J_q - J_b H_b^-1 H_bq
+ * (6 x njoint, row-major). Uses d's work space. CD_EINVAL for a fixed base
+ * (use cd_point_jacobian), CD_ENUMERIC if H_b is singular; err may be NULL. */
+cd_status cd_generalized_jacobian(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
+                                  cd_error *err);
 
 /* Energy and momenta of system s (after cd_kinematics). Kinetic energy [J];
  * linear momentum [kg m/s]; angular momentum about the system CoM and about

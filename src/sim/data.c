@@ -24,7 +24,7 @@ void cd_data_free(cd_data *d)
     free(d->y); free(d->ydot); free(d->body_R); free(d->body_x); free(d->body_c);
     free(d->body_w); free(d->body_v); free(d->body_axisw); free(d->body_V); free(d->body_S);
     free(d->sys_ref); free(d->udot); free(d->tau); free(d->body_fext); free(d->body_fuser);
-    free(d->H); free(d->work); free(d->body_rbi);
+    free(d->H); free(d->work); free(d->jwork); free(d->body_rbi);
     free(d->slot_mode); free(d->slot_dir); free(d->slot_va); free(d->slot_tswitch); free(d->slot_x);
     free(d->slot_xdot); free(d->slot_fn); free(d->slot_ft); free(d->slot_point);
     free(d->slot_normal); free(d->slot_vt); free(d->slot_fnraw); free(d->slot_geomfail);
@@ -54,7 +54,7 @@ cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
     AL(body_v, 3 * nb); AL(body_axisw, 3 * nb); AL(body_V, 6 * nb); AL(body_S, 6 * nb);
     AL(sys_ref, 3 * m->nsys); AL(udot, m->nv + 1); AL(tau, m->nv + 1);
     AL(body_fext, 6 * nb); AL(body_fuser, 6 * nb);
-    AL(H, maxdof * maxdof); AL(work, 12 * nb + 4 * maxdof);
+    AL(H, maxdof * maxdof); AL(work, 12 * nb + 4 * maxdof); AL(jwork, 12 * maxdof + 36);
     AL(slot_mode, ns); AL(slot_dir, 3 * ns); AL(slot_va, 3 * ns); AL(slot_tswitch, ns); AL(slot_x, ns);
     AL(slot_xdot, ns); AL(slot_fn, ns); AL(slot_ft, 3 * ns); AL(slot_point, 3 * ns);
     AL(slot_normal, 3 * ns); AL(slot_vt, 3 * ns); AL(slot_fnraw, ns); AL(slot_geomfail, ns);
