@@ -498,3 +498,33 @@ Test(friction, sticking_pair_turning_together_keeps_its_force_in_the_body_frame)
     cd_data_free(d);
     cd_model_free(m);
 }
+
+Test(friction, a_held_slot_keeps_no_pull_and_the_cone)
+{
+    /* While the chattering guard suspends a slot's switches (slot_held), its
+     * forces are clipped: f_n >= 0 (no pull) and |f_t| <= mu_max f_n. Here a
+     * sticking point is given a stick deflection worth 10 N against a 1 N
+     * normal load (mu_max = 0.5), then moved out of the plane (f_raw < 0). */
+    scene r = incline(0.0, 0.5, 0.5);
+    cd_error e;
+    double ft;
+    (void)e;
+    cr_assert_eq(r.d->slot_mode[0], CD_MODE_STICK);
+    r.d->y[r.m->ny_slot_adr] = 10.0 / r.m->law[0].Kt;
+    cr_assert_eq(cd_forward(r.m, r.d), CD_OK);
+    ft = norm3(r.d->slot_ft);
+    cr_expect_gt(ft, 9.9, "not held: the spring force is what it is (%g N)", ft);
+    r.d->slot_held[0] = 1;
+    cr_assert_eq(cd_forward(r.m, r.d), CD_OK);
+    ft = norm3(r.d->slot_ft);
+    cr_expect_leq(ft, 0.5 * r.d->slot_fn[0] * (1 + 1e-12), "held: |f_t| %g > mu f_n %g", ft, 0.5 * r.d->slot_fn[0]);
+    /* pulled out of the plane and receding: f_raw < 0, the force stays >= 0 */
+    cd_state_of(r.m, r.d, r.block).pos[2] = 1e-6;
+    cd_state_of(r.m, r.d, r.block).vel[2] = 1.0;
+    cr_assert_eq(cd_forward(r.m, r.d), CD_OK);
+    cr_expect_lt(r.d->slot_fnraw[0], 0.0);
+    cr_expect_eq(r.d->slot_fn[0], 0.0, "held: no pull (f_n = %g)", r.d->slot_fn[0]);
+    cr_expect_eq(norm3(r.d->slot_ft), 0.0);
+    cd_data_free(r.d);
+    cd_model_free(r.m);
+}

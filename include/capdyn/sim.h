@@ -94,6 +94,8 @@ typedef struct cd_data {
     double *slot_va;      /* (nslot x 3) slip (anchor) velocity while slipping [m/s] */
     double *slot_fnraw;   /* (nslot) the normal law before the no-pull rule [N] */
     int *slot_geomfail;   /* (nslot) 1 if the last geometry query was rejected */
+    int *slot_held;       /* (nslot) 1 while the chattering guard suspends the slot's switches:
+                             its forces are then clipped to f_n >= 0 and |f_t| <= mu_max f_n */
 
     /* event log: a ring buffer of the last ev_cap events; ev_count is the total */
     cd_event *ev;

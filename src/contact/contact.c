@@ -160,6 +160,14 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
                 if (nu > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
             }
         }
+        if (d->slot_held[k] && mode != CD_MODE_OPEN) {
+            /* switches suspended by the chattering guard (at most `dwell`):
+             * keep the no-pull rule and the friction cone by clipping */
+            double nft;
+            if (fn < 0) fn = 0;
+            nft = cd_v3_norm(ft);
+            if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
+        }
         d->slot_x[k] = x;
         d->slot_xdot[k] = xd;
         d->slot_fnraw[k] = fraw;

@@ -27,7 +27,7 @@ void cd_data_free(cd_data *d)
     free(d->H); free(d->work); free(d->jwork); free(d->body_rbi);
     free(d->slot_mode); free(d->slot_dir); free(d->slot_va); free(d->slot_tswitch); free(d->slot_x);
     free(d->slot_xdot); free(d->slot_fn); free(d->slot_ft); free(d->slot_point);
-    free(d->slot_normal); free(d->slot_vt); free(d->slot_fnraw); free(d->slot_geomfail);
+    free(d->slot_normal); free(d->slot_vt); free(d->slot_fnraw); free(d->slot_geomfail); free(d->slot_held);
     free(d->ev);
     free(d);
 }
@@ -57,7 +57,7 @@ cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
     AL(H, maxdof * maxdof); AL(work, 12 * nb + 4 * maxdof); AL(jwork, 12 * maxdof + 36);
     AL(slot_mode, ns); AL(slot_dir, 3 * ns); AL(slot_va, 3 * ns); AL(slot_tswitch, ns); AL(slot_x, ns);
     AL(slot_xdot, ns); AL(slot_fn, ns); AL(slot_ft, 3 * ns); AL(slot_point, 3 * ns);
-    AL(slot_normal, 3 * ns); AL(slot_vt, 3 * ns); AL(slot_fnraw, ns); AL(slot_geomfail, ns);
+    AL(slot_normal, 3 * ns); AL(slot_vt, 3 * ns); AL(slot_fnraw, ns); AL(slot_geomfail, ns); AL(slot_held, ns);
 #undef AL
     if (ok) ok = (d->body_rbi = calloc((size_t)(2 * nb), sizeof(cd_rbi))) != NULL;
     d->ev_cap = event_capacity > 0 ? event_capacity : 4096;
@@ -96,6 +96,7 @@ void cd_data_reset(const cd_model *m, cd_data *d)
     for (k = 0; k < m->nslot; k++) {
         d->slot_mode[k] = CD_MODE_OPEN;
         d->slot_tswitch[k] = -HUGE_VAL;
+        d->slot_held[k] = 0;
         cd_v3_zero(d->slot_dir + 3 * k);
     }
     d->ev_count = 0;

@@ -280,6 +280,8 @@ static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *c
     int round, k, any;
     cd_status st;
     *changed = 0;
+    for (k = 0; k < m->nslot; k++) /* guard windows that have passed */
+        if (d->slot_held[k] && d->t - d->slot_tswitch[k] >= m->opt.dwell) d->slot_held[k] = 0;
     for (round = 0; round < 4; round++) {
         st = cd_forward(m, d);
         d->stats.nrhs++;
@@ -296,7 +298,11 @@ static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *c
             if (!(gn < 0 || gf < 0)) continue;
             if (d->t - d->slot_tswitch[k] < m->opt.dwell && I->nswitch_now[k] >= 2) { d->stats.nwarn_dwell++; continue; }
             if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
-            if (switch_slot(m, d, k, 1)) { I->nswitch_now[k]++; any = 1; }
+            if (switch_slot(m, d, k, 1)) {
+                I->nswitch_now[k]++;
+                if (I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
+                any = 1;
+            }
         }
         if (!any) break;
         *changed = 1;
@@ -520,7 +526,10 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             if (trig >= 0) {
                 int k = trig / 2;
                 if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
-                if (switch_slot(m, d, k, 0)) I->nswitch_now[k]++;
+                if (switch_slot(m, d, k, 0)) {
+                    I->nswitch_now[k]++;
+                    if (I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
+                }
             }
             st = settle_modes(m, d, I, &changed);
             if (st != CD_OK) { seterr(err, st, "non-finite state at an event", d->t); return st; }
