@@ -10,6 +10,8 @@
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
 #include <hdf5.h>
+#include <gsl/gsl_errno.h>
+#include "../src/io/h5_util.h"
 #include <errno.h>
 #include <fcntl.h>
 #include <math.h>
@@ -18,6 +20,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -699,6 +702,348 @@ Test(cli, integrator_failure_keeps_the_data)
     cr_expect_lt(attr_d(f, "t_final"), 2.0);
     H5Fclose(f);
     rm_rf(dir);
+}
+
+/* ---- write failures (disk full) ------------------------------------------------------ */
+/* "samples     N committed" of a `capdyn info` output (-1 if absent). */
+static long info_samples(const char *out)
+{
+    const char *p = out ? strstr(out, "\nsamples ") : NULL;
+    long n = -1;
+    if (p && sscanf(p + 9, " %ld committed", &n) != 1) n = -1;
+    return n;
+}
+/* The text after "status" of a `capdyn info` output, up to the end of the line. */
+static void info_status(const char *out, char *buf, size_t len)
+{
+    const char *p = out ? strstr(out, "\nstatus ") : NULL;
+    size_t n;
+    buf[0] = 0;
+    if (!p) return;
+    p += 8;
+    while (*p == ' ') p++;
+    n = strcspn(p, "\n");
+    if (n >= len) n = len - 1;
+    memcpy(buf, p, n);
+    buf[n] = 0;
+}
+
+static int h5clear(const char *path)
+{
+    char cmd[600];
+    snprintf(cmd, sizeof cmd, "h5clear --increment=0 '%s' >/dev/null 2>&1", path);
+    return system(cmd);
+}
+
+Test(cli, a_full_disk_stops_the_run_with_one_error_and_keeps_the_committed_samples, .timeout = 60)
+{
+    /* The review's repro (B3), made larger so that commits happen first: the
+     * Fig. 3 impact over 4 s (40001 samples, a 7.8 MB file) under a 4 MiB
+     * file size limit (POSIX sh: ulimit -f counts 512-byte blocks), SIGXFSZ
+     * ignored as a full disk does not send it. Before the fix: exit 139
+     * (segfault in HDF5's atexit clean-up), no message about the write, an
+     * unreadable file claiming "ok" after h5clear. Now: exit 1 (not a
+     * signal), one error line naming the file and the write that could not
+     * be done, and a file (readable as is, and after h5clear --increment=0,
+     * the documented recovery) whose committed samples are > 0, are exactly
+     * those of an unlimited run (bit for bit) and whose status is not "ok". */
+    char dir[64], sc[512], h5[256], ref[256], cmd[2048], st[600], *out = NULL, *err = NULL, errp[300];
+    char *argv[4];
+    hid_t f, fr;
+    size_t n, nr, i;
+    double *t, *tr, *ke, *ker;
+    long ns;
+    int rc, run_rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(h5, sizeof h5, "%s/full.h5", dir);
+    snprintf(ref, sizeof ref, "%s/ref.h5", dir);
+    rc = capdyn(dir, NULL, NULL, "run", sc, "-o", ref, "--quiet", "--set", "simulation.duration=4", (char *)NULL);
+    cr_assert_eq(rc, 0, "the reference run");
+
+    snprintf(cmd, sizeof cmd,
+             "trap '' XFSZ; ulimit -f 8192 || exit 99; exec '%s' run '%s' -o '%s' --quiet --set simulation.duration=4",
+             bin(), sc, h5);
+    argv[0] = (char *)"/bin/sh";
+    argv[1] = (char *)"-c";
+    argv[2] = cmd;
+    argv[3] = NULL;
+    rc = run_rc = wait_status(spawn(dir, argv, NULL));
+    snprintf(errp, sizeof errp, "%s/err.txt", dir);
+    err = slurp(errp);
+    cr_assert_neq(rc, 99, "ulimit -f failed");
+    cr_expect_eq(rc, 1, "exit status %d (>= 128: killed by signal %d); stderr: %s", rc, rc - 128, err);
+    cr_expect(err && strncmp(err, "capdyn: error: ", 15) == 0, "stderr: %s", err);
+    cr_expect(err && strchr(err, '\n') == err + strlen(err) - 1, "one line: %s", err);
+    cr_expect(err && strstr(err, h5) != NULL, "the message names the file: %s", err);
+    cr_expect(err && (strstr(err, "file size limit") || strstr(err, "disk full") || strstr(err, "failed")),
+              "the message says what could not be written: %s", err);
+    free(err);
+
+    /* readable as it is: the space check stopped before writing */
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_expect_eq(rc, 0, "capdyn info without h5clear: %s", err);
+    free(out);
+    free(err);
+    /* the documented recovery, harmless on a consistent file */
+    cr_assert_eq(h5clear(h5), 0, "h5clear --increment=0");
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "capdyn info after h5clear: %s", err);
+    ns = info_samples(out);
+    info_status(out, st, sizeof st);
+    cr_expect_gt(ns, 0, "samples committed before the disk was full: %s", out);
+    cr_expect_lt(ns, 40001);
+    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
+    cr_expect(strstr(st, "file size limit") || strstr(st, "failed") || strstr(st, "running"), "status: '%s'", st);
+    free(out);
+    free(err);
+
+    f = open_ro(h5);
+    fr = open_ro(ref);
+    cr_assert(f >= 0 && fr >= 0);
+    cr_expect_eq(attr_ll(f, "committed_samples"), ns);
+    t = read_all(f, "/time", &n);
+    tr = read_all(fr, "/time", &nr);
+    ke = read_all(f, "/diagnostics/kinetic_energy", &n);
+    ker = read_all(fr, "/diagnostics/kinetic_energy", &nr);
+    cr_assert_geq(n, (size_t)ns);
+    for (i = 0; i < (size_t)ns; i++) {
+        cr_assert_eq(t[i], tr[i], "t[%zu] %.17g vs %.17g in the unlimited run", i, t[i], tr[i]);
+        cr_assert_eq(ke[i], ker[i], "kinetic energy [%zu] %.17g vs %.17g", i, ke[i], ker[i]);
+    }
+    free(t);
+    free(tr);
+    free(ke);
+    free(ker);
+    H5Fclose(f);
+    H5Fclose(fr);
+    cr_log_info("file size limit 4 MiB: exit %d, %ld samples committed (t <= %.4g s), status '%.60s...'", run_rc, ns,
+                (double)(ns - 1) * 1e-4, st);
+    rm_rf(dir);
+}
+
+Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
+{
+    /* A write that fails where no check can foresee it (a disk quota): the
+     * library writer with its space check off, in a child process whose
+     * file size limit is lowered after 2000 committed samples of the Fig. 3
+     * scenario. The file is then truncated (HDF5 recorded a larger end of
+     * file than it could write). `capdyn info` says so and names the
+     * recovery; after `h5clear --increment=0` it reads the 2000 committed
+     * samples, at the times they were taken, and a status that is not "ok". */
+    char dir[64], sc[512], h5[256], st[600], *out = NULL, *err = NULL, want[400];
+    pid_t pid;
+    int rc, ws;
+    long ns, k;
+    const long ncommit = 2000;
+    const double dt = 1e-4;
+    hid_t f;
+    size_t n;
+    double *t;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(h5, sizeof h5, "%s/quota.h5", dir);
+    fflush(NULL);
+    pid = fork();
+    cr_assert(pid >= 0);
+    if (pid == 0) {
+        cd_error e;
+        cd_scenario *s = cd_scenario_load(sc, NULL, 0, &e);
+        cd_data *d = s ? cd_data_create(s->model, s->event_capacity, &e) : NULL;
+        cd_h5_writer *w = d ? cd_h5_create(h5, s->model, s, &e) : NULL;
+        struct stat sb;
+        struct rlimit rl;
+        cd_status r = CD_OK;
+        if (!w) _exit(10);
+        for (k = 0; k < ncommit && r == CD_OK; k++) {
+            if (k > 0) r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
+            if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
+        }
+        if (r != CD_OK || cd_h5_flush(w, &e) != CD_OK) _exit(11);
+        if (stat(h5, &sb) != 0 || getrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(12);
+        signal(SIGXFSZ, SIG_IGN);
+        rl.rlim_cur = (rlim_t)sb.st_size + 8192;
+        if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
+        cd_h5_writer_set_space_check(w, 0, 0);
+        for (; k < 3 * ncommit && r == CD_OK; k++) {
+            r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
+            if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
+        }
+        if (r == CD_OK) r = cd_h5_flush(w, &e);
+        if (r != CD_EIO) _exit(14);
+        if (cd_h5_close(w, s->model, d, CD_OK, "finished", &e) != CD_EIO) _exit(15);
+        cd_data_free(d);
+        cd_scenario_free(s);
+        H5close(); /* would crash on a file left half closed in HDF5's id table */
+        _exit(0);
+    }
+    cr_assert_eq(waitpid(pid, &ws, 0), pid);
+    cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
+              WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
+
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d", rc);
+    snprintf(want, sizeof want, "'h5clear --increment=0 %s'", h5);
+    cr_expect(err && strstr(err, "truncated") && strstr(err, want), "info names the damage and the recovery: %s", err);
+    cr_expect(err && strchr(err, '\n') == err + strlen(err) - 1, "one line: %s", err);
+    free(out);
+    free(err);
+
+    cr_assert_eq(h5clear(h5), 0, "h5clear --increment=0");
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "capdyn info after h5clear: %s", err);
+    ns = info_samples(out);
+    info_status(out, st, sizeof st);
+    cr_expect_eq(ns, ncommit, "the committed samples are back: %s", out);
+    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
+    free(out);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    t = read_all(f, "/time", &n);
+    cr_assert_geq(n, (size_t)ncommit);
+    /* cd_sim_advance stops exactly at its target time */
+    for (k = 0; k < ncommit; k++) cr_assert_eq(t[k], (double)k * dt, "t[%ld] = %.17g", k, t[k]);
+    free(t);
+    H5Fclose(f);
+    rc = capdyn(dir, &out, NULL, "export", h5, "time", (char *)NULL);
+    cr_expect_eq(rc, 0);
+    {
+        int ncol;
+        cr_expect_eq(parse_columns(out, &ncol), ncommit, "export gives the committed samples");
+    }
+    free(out);
+    rm_rf(dir);
+}
+
+Test(cli, more_than_1e9_samples_is_refused)
+{
+    /* B5: output_dt = 1e-300 (or duration = 1e300) made the sample count
+     * overflow a long: the run printed "status ok: finished at t = 0 s" and
+     * exited 0. Now the loader refuses it (exit 1, one line naming the key
+     * and its range) before any file is made. */
+    char dir[64], sc[512], h5[256], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(h5, sizeof h5, "%s/never.h5", dir);
+    rc = capdyn(dir, &out, &err, "run", sc, "-o", h5, "--set", "simulation.output_dt=1e-300", (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, out);
+    cr_expect(err && strstr(err, "key 'simulation.output_dt': expected a value in [duration / 1e9, inf)"),
+              "stderr: %s", err);
+    cr_expect(err && strchr(err, '\n') == err + strlen(err) - 1, "one line: %s", err);
+    cr_expect(!out || !strstr(out, "status"), "no summary: %s", out);
+    cr_expect_neq(access(h5, F_OK), 0, "no file");
+    free(out);
+    free(err);
+    rc = capdyn(dir, &out, &err, "run", sc, "-o", h5, "--set", "simulation.duration=1e300", (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, out);
+    cr_expect(err && strstr(err, "paper_fig3_impact.toml:38:13: key 'simulation.output_dt'"), "stderr: %s", err);
+    free(out);
+    free(err);
+    rc = capdyn(dir, NULL, &err, "check", sc, "--set", "simulation.output_dt=1e-300", (char *)NULL);
+    cr_expect_eq(rc, 1, "check: exit %d", rc);
+    free(err);
+    rm_rf(dir);
+}
+
+Test(cli, a_signal_before_the_results_file_exists_stops_cleanly, .timeout = 30)
+{
+    /* R4: SIGINT was caught only after the results file was created, so one
+     * arriving earlier killed the process with the file half made. A
+     * SIGINT made pending (blocked, then raised) before exec is delivered
+     * when capdyn run installs its handlers and unblocks the signal, before
+     * the file exists: the run stops at once (exit 130) with a closed file
+     * holding the t = 0 sample and status "interrupted". */
+    char dir[64], sc[512], h5[256], s[128], errp[300], *err;
+    char *argv[12];
+    pid_t pid;
+    hid_t f;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
+    snprintf(h5, sizeof h5, "%s/early.h5", dir);
+    argv[0] = (char *)bin();
+    argv[1] = (char *)"run";
+    argv[2] = sc;
+    argv[3] = (char *)"-o";
+    argv[4] = h5;
+    argv[5] = (char *)"--quiet";
+    argv[6] = (char *)"--set";
+    argv[7] = (char *)"simulation.duration=20";
+    argv[8] = NULL;
+    {
+        sigset_t set, old;
+        sigemptyset(&set);
+        sigaddset(&set, SIGINT);
+        cr_assert_eq(sigprocmask(SIG_BLOCK, &set, &old), 0);
+        /* the child inherits the mask; it raises SIGINT itself before exec */
+        fflush(NULL);
+        pid = fork();
+        cr_assert(pid >= 0);
+        if (pid == 0) {
+            int fe = open(strcat(strcpy(errp, dir), "/err.txt"), O_WRONLY | O_CREAT | O_TRUNC, 0644);
+            if (fe >= 0) dup2(fe, 2);
+            raise(SIGINT);
+            execv(argv[0], argv);
+            _exit(127);
+        }
+        sigprocmask(SIG_SETMASK, &old, NULL);
+    }
+    rc = wait_status(pid);
+    snprintf(errp, sizeof errp, "%s/err.txt", dir);
+    err = slurp(errp);
+    cr_expect_eq(rc, 130, "exit %d; stderr: %s", rc, err);
+    cr_expect(err && strstr(err, "SIGINT"), "stderr: %s", err);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0, "the results file is closed and readable");
+    attr_s(f, "run_status", s, sizeof s);
+    cr_expect_str_eq(s, cd_status_string(CD_EINTERRUPT));
+    cr_expect_eq(attr_ll(f, "committed_samples"), 1, "the t = 0 sample only");
+    cr_expect_eq(attr_d(f, "t_final"), 0.0);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+static int g_gsl_errors;
+static void count_gsl_error(const char *reason, const char *file, int line, int gsl_errno)
+{
+    (void)reason; (void)file; (void)line; (void)gsl_errno;
+    g_gsl_errors++;
+}
+
+Test(cli, the_library_leaves_the_gsl_error_handler_to_the_program)
+{
+    /* Only the capdyn program turns GSL's abort-on-error handler off
+     * (src/cli/capdyn.c); the library never sets a handler. A program's own
+     * handler is still in place after loading, simulating (0.05 s of the
+     * Fig. 3 impact, through contact onset) and writing a results file. */
+    char sc[512], h5[256];
+    cd_error e;
+    cd_scenario *s;
+    cd_data *d;
+    cd_h5_writer *w;
+    gsl_error_handler_t *prev, *now_h;
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(h5, sizeof h5, "/tmp/capdyn_cli_gsl_%ld.h5", (long)getpid());
+    prev = gsl_set_error_handler(count_gsl_error);
+    s = cd_scenario_load(sc, NULL, 0, &e);
+    cr_assert_not_null(s, "%s", e.msg);
+    d = cd_data_create(s->model, s->event_capacity, &e);
+    cr_assert_not_null(d, "%s", e.msg);
+    w = cd_h5_create(h5, s->model, s, &e);
+    cr_assert_not_null(w, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(s->model, d, 0.05, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_eq(cd_h5_append(w, s->model, d, &e), CD_OK, "%s", e.msg);
+    cr_assert_eq(cd_h5_close(w, s->model, d, CD_OK, "", &e), CD_OK, "%s", e.msg);
+    now_h = gsl_set_error_handler(prev);
+    cr_expect(now_h == count_gsl_error, "the library replaced the program's GSL error handler");
+    cr_expect_eq(g_gsl_errors, 0, "no GSL error in a healthy run");
+    cr_expect_gt(d->ev_count, 0, "the run went through contact events");
+    cd_data_free(d);
+    cd_scenario_free(s);
+    remove(h5);
 }
 
 Test(cli, bad_arguments_exit_2_runtime_errors_exit_1)

@@ -15,10 +15,16 @@
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
 #include <hdf5.h>
+#include "../src/io/h5_read.h"
+#include "../src/io/h5_util.h"
 #include <math.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
 #include <unistd.h>
 
 typedef struct { cd_model *m; cd_data *d; int arm, ball, walls; } scene;
@@ -618,6 +624,144 @@ Test(h5, append_rejects_another_model)
     r2.m = m2;
     r2.d = d2;
     free_scene(&r2);
+    cleanup(path);
+    free_scene(&r);
+}
+
+/* ---- write failures (disk full, file size limit) ------------------------------ */
+
+/* Appends samples k0..k1 of the scene at t = k * 0.01 s; returns the first
+ * status that is not CD_OK (or CD_OK). */
+static cd_status append_range(scene *r, cd_h5_writer *w, int k0, int k1, cd_error *e)
+{
+    cd_status st;
+    int k;
+    for (k = k0; k <= k1; k++) {
+        if (k > 0 && (st = cd_sim_advance(r->m, r->d, 0.01 * k, NULL, NULL, e)) != CD_OK) return st;
+        if ((st = cd_h5_append(w, r->m, r->d, e)) != CD_OK) return st;
+    }
+    return CD_OK;
+}
+
+/* The committed rows of /time must be exactly t = 0.01 k (the sample times
+ * the scene was advanced to: cd_sim_advance ends exactly at t_end). */
+static void expect_committed_times(const char *path, long n_expected)
+{
+    cd_error e;
+    cd_h5r *r = cd_h5r_open(path, &e);
+    double *t;
+    long k;
+    cr_assert_not_null(r, "%s", e.msg);
+    cr_expect_eq(r->n, n_expected, "committed samples %ld, expected %ld", r->n, n_expected);
+    t = cd_h5r_series(r, "/time", NULL, &e);
+    cr_assert_not_null(t, "%s", e.msg);
+    for (k = 0; k < r->n; k++) cr_expect_eq(t[k], 0.01 * (double)k, "t[%ld] = %.17g", k, t[k]);
+    free(t);
+    {
+        char *st = cd_h5r_attr_str(r, "/", "run_status");
+        cr_assert_not_null(st);
+        cr_expect_str_neq(st, "ok", "a run whose last commit failed never says ok");
+        free(st);
+    }
+    cd_h5r_close(r);
+}
+
+Test(h5, disk_full_stops_before_writing_and_the_file_stays_consistent)
+{
+    /* The free-space check before a commit (statvfs): with a reserve larger
+     * than any disk it refuses the second commit as on a full disk. Nothing
+     * is written then, so the file opens without h5clear and holds the 21
+     * samples of the first commit, bit for bit; the final status is an I/O
+     * error even though the caller says "ok" (its last samples were never
+     * committed). */
+    scene r = make_scene(0);
+    cd_error e;
+    char path[256];
+    cd_h5_writer *w;
+    tmp_path(path, sizeof path, "diskfull");
+    w = cd_h5_create(path, r.m, NULL, &e);
+    cr_assert(w, "%s", e.msg);
+    cr_assert_eq(append_range(&r, w, 0, 20, &e), CD_OK, "%s", e.msg);
+    cr_assert_eq(cd_h5_flush(w, &e), CD_OK, "%s", e.msg);
+    cd_h5_writer_set_space_check(w, 1, 1e30);
+    cr_assert_eq(append_range(&r, w, 21, 25, &e), CD_OK, "appends only buffer: %s", e.msg);
+    cr_expect_eq(cd_h5_flush(w, &e), CD_EIO);
+    cr_expect(strstr(e.msg, "disk full") && strstr(e.msg, path) && strstr(e.msg, "21 samples"),
+              "message: %s", e.msg);
+    cr_expect_eq(cd_h5_append(w, r.m, r.d, &e), CD_EIO, "later appends are refused");
+    cr_expect(strstr(e.msg, "disk full") != NULL, "with the first error: %s", e.msg);
+    cr_expect_eq(cd_h5_close(w, r.m, r.d, CD_OK, "finished", &e), CD_EIO);
+    cr_expect(strstr(e.msg, "disk full") != NULL, "close repeats the first error: %s", e.msg);
+    expect_committed_times(path, 21);
+    {
+        cd_h5r *rd = cd_h5r_open(path, &e);
+        char *msg;
+        cr_assert_not_null(rd, "%s", e.msg);
+        msg = cd_h5r_attr_str(rd, "/", "run_message");
+        cr_assert_not_null(msg);
+        cr_expect(strstr(msg, "disk full") != NULL, "run_message: %s", msg);
+        free(msg);
+        msg = cd_h5r_attr_str(rd, "/", "run_status");
+        cr_expect_str_eq(msg, cd_status_string(CD_EIO));
+        free(msg);
+        cd_h5r_close(rd);
+    }
+    cleanup(path);
+    free_scene(&r);
+}
+
+Test(h5, a_failed_write_keeps_the_committed_rows_after_h5clear, .timeout = 30)
+{
+    /* The worst case, which the space check cannot foresee (a disk quota):
+     * a real write failure. A child process commits 31 samples, lowers its
+     * file size limit to the current size + 4 KiB (SIGXFSZ ignored: the
+     * write fails with EFBIG), turns the space check off and commits
+     * 40 more. The writer must report the failure naming the file and
+     * h5clear, refuse later calls, close without crashing (then the child
+     * calls H5close(), which crashed at exit before), and leave a file whose
+     * 31 committed rows are readable after `h5clear --increment=0` with a
+     * status that is not "ok". */
+    scene r = make_scene(0);
+    char path[256], cmd[600];
+    pid_t pid;
+    int st;
+    tmp_path(path, sizeof path, "fsize");
+    fflush(NULL);
+    pid = fork();
+    cr_assert(pid >= 0);
+    if (pid == 0) {
+        cd_error e;
+        cd_h5_writer *w = cd_h5_create(path, r.m, NULL, &e);
+        struct stat sb;
+        struct rlimit rl;
+        cd_status s1, s2;
+        if (!w) _exit(10);
+        if (append_range(&r, w, 0, 30, &e) != CD_OK || cd_h5_flush(w, &e) != CD_OK) _exit(11);
+        if (stat(path, &sb) != 0) _exit(12);
+        signal(SIGXFSZ, SIG_IGN);
+        if (getrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
+        rl.rlim_cur = (rlim_t)sb.st_size + 4096;
+        if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
+        cd_h5_writer_set_space_check(w, 0, 0);
+        s1 = append_range(&r, w, 31, 70, &e);
+        if (s1 == CD_OK) s1 = cd_h5_flush(w, &e);
+        if (s1 != CD_EIO) _exit(14);
+        if (!strstr(e.msg, path) || !strstr(e.msg, "h5clear") || !strstr(e.msg, "31 samples")) {
+            fprintf(stderr, "message: %s\n", e.msg);
+            _exit(15);
+        }
+        if (cd_h5_append(w, r.m, r.d, &e) != CD_EIO) _exit(16);
+        s2 = cd_h5_close(w, r.m, r.d, CD_OK, "finished", &e);
+        if (s2 != CD_EIO) _exit(17);
+        H5close();
+        _exit(0);
+    }
+    cr_assert_eq(waitpid(pid, &st, 0), pid);
+    cr_assert(WIFEXITED(st), "the child was killed by signal %d", WIFSIGNALED(st) ? WTERMSIG(st) : 0);
+    cr_assert_eq(WEXITSTATUS(st), 0, "child check %d failed (see the test's source)", WEXITSTATUS(st));
+    snprintf(cmd, sizeof cmd, "h5clear --increment=0 '%s' >/dev/null 2>&1", path);
+    cr_assert_eq(system(cmd), 0, "h5clear --increment=0 failed");
+    expect_committed_times(path, 31);
     cleanup(path);
     free_scene(&r);
 }

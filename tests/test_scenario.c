@@ -23,6 +23,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
@@ -215,6 +216,93 @@ Test(scenario_reject, missing_include_file)
 {
     expect_fail("bad_include_missing.toml", CD_EIO,
                 SUBS("bad_include_missing.toml:2:28: key 'include[1]': cannot read included file", "no_such_file.toml"));
+}
+
+Test(scenario_reject, include_of_a_device_does_not_hang, .timeout = 10)
+{
+    /* /dev/zero never ends: reading it hung the loader (and `capdyn check`).
+     * Only regular files are read; the error names the include entry. A
+     * hang is caught by the timeout. */
+    expect_fail("bad_include_device.toml", CD_EIO,
+                SUBS("bad_include_device.toml:2:28: key 'include[1]': cannot read included file '/dev/zero'",
+                     "not a regular file (a character device)"));
+}
+
+Test(scenario_reject, include_of_a_directory)
+{
+    expect_fail("bad_include_dir.toml", CD_EIO,
+                SUBS("bad_include_dir.toml:2:11: key 'include': cannot read included file", "not a regular file (a directory)"));
+}
+
+Test(scenario_reject, main_file_must_be_a_regular_file, .timeout = 10)
+{
+    cd_error err;
+    cd_scenario *sc = cd_scenario_load("/dev/zero", NULL, 0, &err);
+    cr_assert_null(sc);
+    cr_expect_eq(err.status, CD_EIO);
+    cr_expect(strstr(err.msg, "cannot read scenario file '/dev/zero': not a regular file (a character device)"),
+              "message: %s", err.msg);
+}
+
+Test(scenario_reject, file_larger_than_16_MiB, .timeout = 10)
+{
+    /* A sparse 17 MiB file: refused from its size (stat), before reading. */
+    char path[256], inc[512];
+    FILE *f;
+    cd_error err;
+    cd_scenario *sc;
+    snprintf(path, sizeof path, "/tmp/capdyn_test_scenario_big_%ld.toml", (long)getpid());
+    f = fopen(path, "wb");
+    cr_assert_not_null(f);
+    cr_assert_eq(fseek(f, 17L << 20, SEEK_SET), 0);
+    cr_assert_eq(fputc('\n', f), '\n');
+    fclose(f);
+    sc = cd_scenario_load(path, NULL, 0, &err);
+    cr_expect_null(sc);
+    cr_expect_eq(err.status, CD_EIO);
+    cr_expect(strstr(err.msg, "more than the 16 MiB a scenario file may have") != NULL, "message: %s", err.msg);
+    /* the same file as an include: located at the include entry */
+    snprintf(inc, sizeof inc, "/tmp/capdyn_test_scenario_inc_%ld.toml", (long)getpid());
+    f = fopen(inc, "w");
+    cr_assert_not_null(f);
+    fprintf(f, "include = \"%s\"\n", path);
+    fclose(f);
+    sc = cd_scenario_load(inc, NULL, 0, &err);
+    cr_expect_null(sc);
+    cr_expect(strstr(err.msg, ":1:11: key 'include': cannot read included file") &&
+                  strstr(err.msg, "more than the 16 MiB"),
+              "message: %s", err.msg);
+    remove(path);
+    remove(inc);
+}
+
+Test(scenario_reject, more_than_1e9_samples)
+{
+    /* duration / output_dt = 4e300 made (long)ceil(...) in the CLI undefined
+     * (the run then "finished" at t = 0 with exit 0): the loader refuses
+     * more than 1e9 samples, naming output_dt and its allowed range. */
+    expect_fail("bad_output_dt_tiny.toml", CD_EINVAL,
+                SUBS("bad_output_dt_tiny.toml:4:13: key 'simulation.output_dt': expected a value in [duration / 1e9, inf) "
+                     "= [4e-09, inf) s", "got 1e-300"));
+}
+
+Test(scenario_reject, more_than_1e9_samples_from_an_override)
+{
+    /* minimal.toml: duration 4 s, output_dt duration / 1000 by default */
+    const char *dur[] = {"simulation.duration=1e300", "simulation.output_dt=1e-4"};
+    const char *dt[] = {"simulation.output_dt=1e-300"};
+    expect_fail_ov("minimal.toml", dur, 2, CD_EINVAL,
+                   SUBS("--set 'simulation.output_dt=1e-4': key 'simulation.output_dt': expected a value in "
+                        "[duration / 1e9, inf) = [1e+291, inf) s"));
+    expect_fail_ov("minimal.toml", dt, 1, CD_EINVAL,
+                   SUBS("--set 'simulation.output_dt=1e-300': key 'simulation.output_dt'", "got 1e-300"));
+    {
+        /* 1e9 samples (to rounding: 4 / 4e-9 <= 1e9 in doubles) is allowed */
+        const char *ok[] = {"simulation.output_dt=4e-9"};
+        cd_scenario *sc = load_ok("minimal.toml", ok, 1);
+        cr_expect(fabs(sc->duration / sc->output_dt - 1e9) <= 1.0, "%.17g samples", sc->duration / sc->output_dt);
+        cd_scenario_free(sc);
+    }
 }
 
 Test(scenario_reject, include_cycle)

@@ -5,14 +5,16 @@
  *   capdyn info results.h5
  *   capdyn export results.h5 WHAT [options]
  *
- * Only this program turns GSL's abort-on-error handler off; the library
- * reports errors as values. Messages: one line on stderr starting with
+ * Only this program turns GSL's abort-on-error handler off (the library
+ * reports errors as values and never touches the handler), and only this
+ * program turns HDF5's atexit clean-up off (see main). Messages: one line on stderr starting with
  * "capdyn: error: "; exit 2 for a bad command line, 1 for a runtime error,
  * 130 when stopped by a signal. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 
 #include <gsl/gsl_errno.h>
+#include <hdf5.h>
 #include <errno.h>
 #include <math.h>
 #include <stdarg.h>
@@ -95,7 +97,14 @@ double cli_wall(void)
 int main(int argc, char **argv)
 {
     const char *cmd;
-    /* GSL's default handler aborts the process; errors come back as values */
+    /* Before any HDF5 call: no HDF5 clean-up at exit(). HDF5 1.10 keeps a
+     * file whose flush or close failed (disk full) in its id table, half
+     * destroyed, and its atexit handler then crashes on it (segfault in
+     * H5F__close_cb). Every file is closed explicitly; after a failed write
+     * the kernel reclaims what HDF5 could not release. */
+    H5dont_atexit();
+    /* GSL's default handler aborts the process; errors come back as values.
+     * Only this program does this: the library never changes the handler. */
     gsl_set_error_handler_off();
     if (argc < 2) {
         fputs(top_help, stderr);

@@ -92,7 +92,7 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
     }
     /* status */
     if (status && strcmp(status, "running") == 0)
-        snprintf(line, sizeof line, "unfinished: the writer did not close the file (killed?); committed data only");
+        snprintf(line, sizeof line, "unfinished: the writer did not close the file (killed, or writing failed: disk full?); committed data only");
     else
         snprintf(line, sizeof line, "%s%s%s", status ? status : "?", message && *message ? ": " : "",
                  message ? message : "");

@@ -33,7 +33,10 @@ static const char *run_help =
     "A progress bar is drawn on stderr when it is a terminal. Ctrl-C (SIGINT) or\n"
     "SIGTERM stops the run cleanly: the file is closed with what was computed and\n"
     "the exit status is 130. On an integrator failure (stalled step size, NaN,\n"
-    "step budget) the file keeps everything up to the failure; exit status 1.\n";
+    "step budget) the file keeps everything up to the failure; exit status 1.\n"
+    "If the results file cannot be written (disk full, file size limit), the run\n"
+    "stops with one error line naming the file and exit status 1; the file keeps\n"
+    "the samples committed before (docs/results-format.md, 'When writing fails').\n";
 
 static const char *check_help =
     "usage: capdyn check SCENARIO.toml [--set KEY=VALUE ...]\n"
@@ -45,6 +48,18 @@ static const char *check_help =
 
 static volatile sig_atomic_t g_signal = 0;
 static void on_signal(int sig) { g_signal = sig; }
+
+static void restore_signals(const struct sigaction *i, const struct sigaction *t, const struct sigaction *x,
+                            const sigset_t *mask)
+{
+    sigprocmask(SIG_SETMASK, mask, NULL);
+    sigaction(SIGINT, i, NULL);
+    sigaction(SIGTERM, t, NULL);
+    sigaction(SIGXFSZ, x, NULL);
+}
+
+/* Most samples a run may ask for (the loader's limit, docs/scenario-format.md). */
+#define CLI_MAX_SAMPLES 1e9
 
 typedef struct {
     int progress;          /* draw the bar */
@@ -195,12 +210,14 @@ int cmd_run(int argc, char **argv)
     cd_error err, werr;
     cd_status st = CD_OK, cst;
     run_ctx ctx;
-    char outbuf[1024], msg[768];
+    char outbuf[1024], msg[768], wmsg[512];
     const char *out;
     long i, nout;
     double last_flush, t_last_sample;
     int rc = parse_opts("run", argc, argv, &o, 1), exitc;
-    struct sigaction sa, old_int, old_term;
+    double ratio;
+    struct sigaction sa, old_int, old_term, old_xfsz;
+    sigset_t unblock, old_mask;
 
     if (rc) {
         free(o.sets);
@@ -218,8 +235,17 @@ int cmd_run(int argc, char **argv)
         return CLI_FAIL;
     }
     m = sc->model;
-    if (!(sc->duration > 0) || !(sc->output_dt > 0)) {
-        cli_error("%s: duration and output_dt must be positive", o.scenario);
+    if (!(sc->duration > 0) || !(sc->output_dt > 0) || !isfinite(sc->duration)) {
+        cli_error("%s: duration and output_dt must be positive and finite", o.scenario);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    /* the loader bounds duration / output_dt; this guards the conversion to
+     * an integer (undefined behaviour when out of range) all the same */
+    ratio = sc->duration / sc->output_dt;
+    if (!(ratio <= CLI_MAX_SAMPLES)) {
+        cli_error("%s: duration / output_dt = %g samples is more than %g; raise simulation.output_dt",
+                  o.scenario, ratio, CLI_MAX_SAMPLES);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
@@ -229,10 +255,29 @@ int cmd_run(int argc, char **argv)
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
+    /* Signals are caught before the results file exists, so that a SIGINT
+     * while it is being created still ends with a closed file. SIGXFSZ
+     * (file size limit, ulimit -f) would kill the process in the middle of
+     * an HDF5 write: ignored, the write fails with EFBIG and is reported. */
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, &old_int);
+    sigaction(SIGTERM, &sa, &old_term);
+    sa.sa_handler = SIG_IGN;
+    sigaction(SIGXFSZ, &sa, &old_xfsz);
+    /* a run started with these blocked (inherited mask) still stops on them;
+     * one already pending is delivered here and stops the run at its start */
+    sigemptyset(&unblock);
+    sigaddset(&unblock, SIGINT);
+    sigaddset(&unblock, SIGTERM);
+    sigprocmask(SIG_UNBLOCK, &unblock, &old_mask);
+
     /* the results file first: an unwritable path fails before any work */
     w = cd_h5_create(out, m, sc, &err);
     if (!w) {
         cli_error("%s", err.msg);
+        restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
         cd_data_free(d);
         cd_scenario_free(sc);
         return CLI_FAIL;
@@ -248,6 +293,7 @@ int cmd_run(int argc, char **argv)
     if (!ctx.fn_max || !ctx.ft_max) {
         cli_error("out of memory");
         cd_h5_close(w, m, d, CD_ENOMEM, "out of memory", NULL);
+        restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
         free(ctx.fn_max);
         free(ctx.ft_max);
         cd_data_free(d);
@@ -257,19 +303,16 @@ int cmd_run(int argc, char **argv)
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, &ctx);
 
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
-
     err.status = werr.status = CD_OK;
-    err.msg[0] = werr.msg[0] = 0;
+    err.msg[0] = werr.msg[0] = wmsg[0] = 0;
     st = cd_h5_append(w, m, d, &werr);
+    if (st != CD_OK) err = werr;
+    /* a signal that came while the file was being created */
+    if (st == CD_OK && g_signal) st = CD_EINTERRUPT;
     t_last_sample = d->t;
     last_flush = cli_wall();
     /* samples at k output_dt; the last one exactly at the duration */
-    nout = (long)ceil(sc->duration / sc->output_dt - 1e-9);
+    nout = (long)ceil(ratio - 1e-9);
     for (i = 1; st == CD_OK && i <= nout; i++) {
         double tn = i == nout ? sc->duration : (double)i * sc->output_dt;
         if (tn > sc->duration) tn = sc->duration;
@@ -286,6 +329,8 @@ int cmd_run(int argc, char **argv)
         if (g_signal) { st = CD_EINTERRUPT; break; }
     }
     if (st != CD_OK && err.msg[0] == 0) snprintf(err.msg, sizeof err.msg, "%s at t = %.9g s", cd_status_string(st), d->t);
+    /* the writer's errors are the only CD_EIO of a run */
+    if (st == CD_EIO) snprintf(wmsg, sizeof wmsg, "%s", err.msg);
     clear_progress(&ctx);
 
     /* keep the last good state of a failed or interrupted run */
@@ -297,18 +342,18 @@ int cmd_run(int argc, char **argv)
     else
         snprintf(msg, sizeof msg, "%s", err.msg);
     cst = cd_h5_close(w, m, d, st, msg, &werr);
+    if (cst != CD_OK && !wmsg[0]) snprintf(wmsg, sizeof wmsg, "%s", werr.msg);
     ctx.wall0 = cli_wall() - ctx.wall0;
-    sigaction(SIGINT, &old_int, NULL);
-    sigaction(SIGTERM, &old_term, NULL);
+    restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
 
-    if (st == CD_OK) exitc = CLI_OK;
+    /* a results file that could not be written is a failure, whatever the
+     * simulation did */
+    if (wmsg[0]) exitc = CLI_FAIL;
+    else if (st == CD_OK) exitc = CLI_OK;
     else if (st == CD_EINTERRUPT && g_signal) exitc = CLI_INTERRUPT;
     else exitc = CLI_FAIL;
 
-    if (cst != CD_OK) {
-        cli_error("closing '%s': %s", out, werr.msg);
-        if (exitc == CLI_OK) exitc = CLI_FAIL;
-    } else if (!o.quiet) {
+    if (!wmsg[0] && !o.quiet) {
         cd_error rerr;
         cd_h5r *r = cd_h5r_open(out, &rerr);
         if (r) {
@@ -323,9 +368,14 @@ int cmd_run(int argc, char **argv)
         }
     }
     fflush(stdout);
-    if (exitc == CLI_INTERRUPT)
+    if (wmsg[0]) {
+        /* one line: the first write error (it names the file and what failed) */
+        if (st != CD_OK && st != CD_EIO)
+            cli_error("run failed (%s): %s", cd_status_string(st), msg);
+        cli_error("%s (simulation at t = %.9g s)", wmsg, d->t);
+    } else if (exitc == CLI_INTERRUPT)
         fprintf(stderr, "capdyn: %s; results up to t = %.9g s kept in '%s'\n", msg, d->t, out);
-    else if (exitc != CLI_OK && cst == CD_OK)
+    else if (exitc != CLI_OK)
         cli_error("run failed (%s): %s; results up to t = %.9g s kept in '%s'", cd_status_string(st), msg, d->t,
                   out);
     free(ctx.fn_max);

@@ -17,6 +17,19 @@
  * "file open for writing" flag, so a file left by a killed writer opens
  * without h5clear.
  *
+ * Write failures (docs/results-format.md, "When writing fails"). Before a
+ * commit writes anything, check_space() asks the file system (statvfs) and
+ * the file size limit (RLIMIT_FSIZE) for room for a generous estimate of
+ * it; without room the writer stops ("stopped") while the file is still
+ * as of its last commit, and still closes it with an I/O error status. A
+ * write that fails anyway (a quota) marks the writer "failed": nothing more
+ * is written to the file (its descriptor is pointed at /dev/null so that
+ * HDF5's close succeeds and leaves nothing half destroyed in its id table),
+ * and the file may need `h5clear --increment=0` to be read. The final
+ * status is written last, after the data commit succeeded, and in place
+ * (fixed-size attributes), so a file never says "ok" when its last commit
+ * failed.
+ *
  * HDF5 prints its error stack by default; every public call here silences
  * the automatic printing for its own duration (saved and restored), so the
  * library never prints. */
@@ -31,13 +44,24 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <fcntl.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
+#include <sys/statvfs.h>
 #include <time.h>
 #include <unistd.h>
 
 #define CD_H5_FORMAT_VERSION 1
 #define CD_H5_NAMELEN 64   /* fixed-length name fields in the static tables */
 #define CD_H5_ATTR_MAX 60000 /* larger texts go to a dataset (object header limit 64 KiB) */
+/* The status attributes are created at their final size (fixed-length
+ * strings), so that writing the final status rewrites them in place and
+ * allocates nothing in the file. */
+#define CD_H5_STATUS_LEN 48
+#define CD_H5_MESSAGE_LEN 1024
+/* Room a commit keeps beyond its own estimate: metadata (chunk index nodes,
+ * object header continuations) and the closing attributes. */
+#define CD_H5_SPACE_MARGIN (512.0 * 1024.0)
 
 enum { T_F64 = 0, T_I64, T_I8 };
 
@@ -50,6 +74,7 @@ typedef struct {
     size_t rowlen;        /* elements per row */
     int type;             /* T_F64, T_I64, T_I8 */
     unsigned char *buf;   /* cap_rows x rowlen elements */
+    long long chunk_rows; /* rows per chunk (for the space estimate) */
 } h5_series;
 
 /* series indices of one system */
@@ -64,6 +89,7 @@ struct cd_h5_writer {
     int nser, capser;
     int cap_rows, nbuf;           /* row buffer capacity and rows pending */
     long long nwritten;           /* rows on disk (= committed after a commit) */
+    long long ncommitted;         /* the committed_samples of the last good commit */
     /* series indices */
     int s_time;
     sys_series *s_sys;
@@ -77,7 +103,16 @@ struct cd_h5_writer {
     long ev_next;                 /* total-count index of the next event to take from d */
     long long ev_lost;
     struct timespec wall0;
-    int failed;                   /* a write failed: later commits are refused */
+    char *path;                   /* for messages and the free-space check */
+    /* failed: an HDF5 write failed; the file on disk may be damaged beyond
+     * its last commit and nothing more is written to it.
+     * stopped: the space check refused a commit before writing anything;
+     * the file is consistent (as of its last commit) and still takes the
+     * closing attributes. */
+    int failed, stopped;
+    char why[512];                /* the first error, repeated by later calls */
+    int space_check;              /* check free space before each commit (default 1) */
+    double reserve;               /* bytes the check keeps free beyond its estimate */
 };
 
 /* ---- error plumbing --------------------------------------------------------- */
@@ -138,6 +173,22 @@ static int attr_str(hid_t obj, const char *name, const char *s)
     if (t < 0) return -1;
     r = attr_write(obj, name, t, t, 0, s);
     H5Tclose(t);
+    return r;
+}
+/* A string attribute of a fixed size (len bytes with the NUL; longer text
+ * is cut), rewritten in place when it already has that size. */
+static int attr_str_fixed(hid_t obj, const char *name, const char *s, size_t len)
+{
+    char *buf = calloc(1, len);
+    hid_t t;
+    int r;
+    if (!buf) return -1;
+    snprintf(buf, len, "%s", s ? s : "");
+    t = str_type(len);
+    if (t < 0) { free(buf); return -1; }
+    r = attr_write(obj, name, t, t, 0, buf);
+    H5Tclose(t);
+    free(buf);
     return r;
 }
 static int attr_i64(hid_t obj, const char *name, long long v)
@@ -442,6 +493,7 @@ static int add_series(cd_h5_writer *w, hid_t loc, const char *name, int type, in
     if (chunk[0] > 4096) chunk[0] = 4096;
     chunk[1] = t0;
     chunk[2] = t1;
+    s->chunk_rows = (long long)chunk[0];
     sp = H5Screate_simple(rank, dims, maxd);
     dcpl = H5Pcreate(H5P_DATASET_CREATE);
     if (sp < 0 || dcpl < 0) goto fail;
@@ -526,45 +578,158 @@ static int write_events(cd_h5_writer *w)
     return 0;
 }
 
+/* ---- space check ------------------------------------------------------------------ */
+/* Rows a commit rewrites of one extendible dataset: every chunk the rows
+ * [from, from + n) touch (a partly filled chunk is rewritten whole). */
+static double chunk_bytes(long long from, long long n, long long chunk_rows, double row_bytes)
+{
+    long long first, last;
+    if (n <= 0 || chunk_rows <= 0) return 0.0;
+    first = from / chunk_rows;
+    last = (from + n - 1) / chunk_rows;
+    /* deflate can expand incompressible data by ~0.1 %; a rewritten chunk
+     * may go to a new place: count it in full */
+    return (double)(last - first + 1) * ((double)chunk_rows * row_bytes * 1.01 + 64.0);
+}
+
+/* A generous upper bound of the bytes the next commit adds to the file. */
+static double commit_bytes(const cd_h5_writer *w)
+{
+    double b = CD_H5_SPACE_MARGIN;
+    int i;
+    for (i = 0; i < w->nser; i++) {
+        const h5_series *s = w->ser + i;
+        b += chunk_bytes(w->nwritten, w->nbuf, s->chunk_rows, (double)(s->rowlen * type_size(s->type)));
+        b += w->nbuf > 0 ? 4096.0 : 0.0; /* chunk index node */
+    }
+    if (w->ev_nbuf > 0 && w->ev_ftype >= 0)
+        b += chunk_bytes(w->ev_written, w->ev_nbuf, 512, (double)H5Tget_size(w->ev_ftype)) + 4096.0;
+    return b;
+}
+
+static double mb(double bytes) { return bytes / 1048576.0; }
+
+/* Before a commit writes anything: is there room for it on the file system
+ * and under the file size limit (ulimit -f)? If not, stop the writer while
+ * the file is still consistent (nothing committed so far is lost) instead
+ * of letting HDF5 fail half way through writing its metadata, which can
+ * leave a file that needs h5clear and whose last commit is damaged. A disk
+ * quota or another process filling the disk is not seen here: the write
+ * then fails (w->failed). */
+static int check_space(const cd_h5_writer *w, double need, char *why, size_t len)
+{
+    double avail = -1.0;
+    hsize_t size = 0;
+    struct rlimit rl;
+    struct statvfs vfs;
+    void *handle = NULL;
+    int have_vfs;
+    if (!w->space_check) return 0;
+    if (H5Fget_filesize(w->file, &size) < 0) size = 0;
+    if (getrlimit(RLIMIT_FSIZE, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY &&
+        (double)size + need > (double)rl.rlim_cur) {
+        snprintf(why, len,
+                 "results file '%s': the next write (up to %.2f MB) would pass the file size limit "
+                 "(ulimit -f: %.2f MB, file %.2f MB); stopped before writing, the file keeps the %lld "
+                 "samples committed so far",
+                 w->path, mb(need), mb((double)rl.rlim_cur), mb((double)size), w->ncommitted);
+        return -1;
+    }
+    /* the file's own descriptor: right even if the path was renamed */
+    if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &handle) >= 0 && handle)
+        have_vfs = fstatvfs(*(int *)handle, &vfs) == 0;
+    else
+        have_vfs = statvfs(w->path, &vfs) == 0;
+    if (have_vfs) avail = (double)vfs.f_bavail * (double)vfs.f_frsize;
+    if (have_vfs && avail < need) {
+        snprintf(why, len,
+                 "results file '%s': disk full: %.2f MB free, the next write needs up to %.2f MB; "
+                 "stopped before writing, the file keeps the %lld samples committed so far",
+                 w->path, mb(avail), mb(need), w->ncommitted);
+        return -1;
+    }
+    return 0;
+}
+
+static cd_status refused(cd_h5_writer *w, cd_error *err)
+{
+    seterr(err, CD_EIO, "%s", w->why[0] ? w->why : "results file: an earlier write failed");
+    return CD_EIO;
+}
+
+static cd_status write_failed(cd_h5_writer *w, cd_error *err, const char *what)
+{
+    w->failed = 1;
+    snprintf(w->why, sizeof w->why,
+             "results file '%s': %s failed (disk full, quota or I/O error); the file is as of its last "
+             "commit (%lld samples) and may need 'h5clear --increment=0 %s' before it can be read",
+             w->path, what, w->ncommitted, w->path);
+    seterr(err, CD_EIO, "%s", w->why);
+    return CD_EIO;
+}
+
 /* The commit protocol (see the top of the file). */
 static cd_status commit(cd_h5_writer *w, cd_error *err)
 {
     int i;
     hid_t ev;
-    if (w->failed) {
-        seterr(err, CD_EIO, "HDF5 results file is in a failed state after an earlier write error");
+    char what[96];
+    if (w->failed || w->stopped) return refused(w, err);
+    if (check_space(w, commit_bytes(w) + w->reserve, w->why, sizeof w->why) < 0) {
+        w->stopped = 1;
+        seterr(err, CD_EIO, "%s", w->why);
         return CD_EIO;
     }
     for (i = 0; i < w->nser; i++)
         if (write_rows(w->ser + i, w->nwritten, w->nbuf) < 0) {
-            w->failed = 1;
-            seterr(err, CD_EIO, "HDF5: writing %d rows of a time series failed (disk full?)", w->nbuf);
-            return CD_EIO;
+            snprintf(what, sizeof what, "writing %d samples", w->nbuf);
+            return write_failed(w, err, what);
         }
-    if (write_events(w) < 0) {
-        w->failed = 1;
-        seterr(err, CD_EIO, "HDF5: writing the event table failed (disk full?)");
-        return CD_EIO;
-    }
+    if (write_events(w) < 0) return write_failed(w, err, "writing the event table");
     w->nwritten += w->nbuf;
     w->nbuf = 0;
     ev = w->ev_dset;
-    if (attr_i64(ev, "lost", w->ev_lost) < 0 || H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0 ||
-        attr_i64(w->file, "committed_events", w->ev_written) < 0 ||
-        attr_i64(w->file, "committed_samples", w->nwritten) < 0 ||
-        H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
-        w->failed = 1;
-        seterr(err, CD_EIO, "HDF5: flushing the results file failed");
-        return CD_EIO;
-    }
+    if (attr_i64(ev, "lost", w->ev_lost) < 0 || H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0)
+        return write_failed(w, err, "flushing the samples");
+    if (attr_i64(w->file, "committed_events", w->ev_written) < 0 ||
+        attr_i64(w->file, "committed_samples", w->nwritten) < 0 || H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0)
+        return write_failed(w, err, "committing the sample counters");
+    w->ncommitted = w->nwritten;
     return CD_OK;
 }
 
+void cd_h5_writer_set_space_check(cd_h5_writer *w, int on, double reserve)
+{
+    if (!w) return;
+    w->space_check = on != 0;
+    w->reserve = reserve > 0 ? reserve : 0.0;
+}
+
 /* ---- lifetime ---------------------------------------------------------------------- */
+/* After a failed write: point the file's descriptor (HDF5's default sec2
+ * driver keeps one) at /dev/null. Closing flushes HDF5's dirty caches once
+ * more; those writes then neither touch the file on disk again (it stays
+ * as the failure left it: its last commit plus what the failed flush got
+ * out) nor fail. A close that fails would leave the file in HDF5's id
+ * table half destroyed, and HDF5's clean-up at exit (or H5close) would then
+ * crash on it. Reads of /dev/null give zeros; everything a close needs is
+ * in HDF5's caches for files of this size. */
+static void detach_file(cd_h5_writer *w)
+{
+    void *h = NULL;
+    int sink;
+    if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &h) < 0 || !h) return;
+    sink = open("/dev/null", O_RDWR);
+    if (sink < 0) return;
+    (void)dup2(sink, *(int *)h);
+    close(sink);
+}
+
 static void writer_free(cd_h5_writer *w)
 {
     int i;
     if (!w) return;
+    if (w->failed && w->file >= 0) detach_file(w);
     for (i = 0; i < w->nser; i++) {
         if (w->ser[i].dset >= 0) H5Dclose(w->ser[i].dset);
         free(w->ser[i].buf);
@@ -578,6 +743,7 @@ static void writer_free(cd_h5_writer *w)
     if (w->kind_enum >= 0) H5Tclose(w->kind_enum);
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
     if (w->file >= 0) H5Fclose(w->file);
+    free(w->path);
     free(w);
 }
 
@@ -795,9 +961,10 @@ static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenari
     rc |= attr_f64(f, "event_tol", m->opt.event_tol);
     rc |= attr_f64(f, "dwell", m->opt.dwell);
     rc |= attr_f64v(f, "gravity", 3, m->gravity);
-    rc |= attr_str(f, "run_status", "running");
+    rc |= attr_str_fixed(f, "run_status", "running", CD_H5_STATUS_LEN);
     rc |= attr_int(f, "run_status_code", -1);
-    rc |= attr_str(f, "run_message", "the run has not finished (or was killed)");
+    rc |= attr_str_fixed(f, "run_message", "the run has not finished (or was killed, or writing the file failed)",
+                         CD_H5_MESSAGE_LEN);
     rc |= attr_i64(f, "committed_events", 0);
     rc |= attr_i64(f, "committed_samples", 0);
     return rc ? -1 : 0;
@@ -833,13 +1000,18 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         return NULL;
     }
     w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = -1;
+    w->space_check = 1;
+    w->path = malloc(strlen(path) + 1);
+    if (w->path) strcpy(w->path, path);
     w->nsys = m->nsys;
     w->nbody = m->nbody;
     w->nslot = m->nslot;
     w->ny = m->ny;
     clock_gettime(CLOCK_MONOTONIC, &w->wall0);
     w->s_sys = calloc((size_t)m->nsys, sizeof *w->s_sys);
-    if (!w->s_sys) {
+    if (!w->s_sys || !w->path) {
+        free(w->s_sys);
+        free(w->path);
         free(w);
         if (!existed) remove(path);
         seterr(err, CD_ENOMEM, "out of memory");
@@ -857,10 +1029,12 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
     if (create_event_types(w) < 0 || write_root_attrs(w, m, sc) < 0 || write_model_tables(w->file, m) < 0 ||
         create_layout(w, m) < 0 || alloc_buffers(w) < 0 ||
         H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
+        w->failed = 1; /* closed without writing more, then removed */
         writer_free(w);
         cd_h5_quiet_end(&q);
         remove(path);
-        seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full or HDF5 error)", path);
+        seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full, file size limit or HDF5 error)",
+               path);
         return NULL;
     }
     cd_h5_quiet_end(&q);
@@ -905,10 +1079,7 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
         seterr(err, CD_EINVAL, "cd_h5_append: the model is not the one the file was created for");
         return CD_EINVAL;
     }
-    if (w->failed) {
-        seterr(err, CD_EIO, "HDF5 results file is in a failed state after an earlier write error");
-        return CD_EIO;
-    }
+    if (w->failed || w->stopped) return refused(w, err);
     row_f64(w, w->s_time)[0] = d->t;
     for (s = 0; s < m->nsys; s++) {
         const sys_series *ss = w->s_sys + s;
@@ -999,47 +1170,83 @@ cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err)
     return st;
 }
 
+/* Closing: commit the data first, then the statistics, then the status
+ * (in place, fixed size) last, each step flushed before the next, so that a
+ * file whose final commit failed never says "ok". If a write failed, the
+ * file is left alone (its last commit is what is on disk); if the space
+ * check stopped the writer, the file is consistent and gets the closing
+ * attributes, with an I/O error status, if there is still room for them. */
 cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,
                       const char *message, cd_error *err)
 {
     cd_h5_quiet q;
     cd_status st = CD_OK;
+    cd_error tmp;
     hid_t f;
     int rc = 0;
     if (!w) return CD_OK;
+    if (!err) err = &tmp;
     cd_h5_quiet_begin(&q);
     f = w->file;
-    /* the last events (logged after the last sample) still belong in the table */
-    if (d && m && !w->failed && take_events(w, d) < 0) rc = -1;
-    rc |= attr_str(f, "run_status", cd_status_string(run_status));
-    rc |= attr_int(f, "run_status_code", (int)run_status);
-    rc |= attr_str(f, "run_message", message ? message : "");
-    if (d) {
-        const cd_stats *s = &d->stats;
-        rc |= attr_f64(f, "t_final", d->t);
-        rc |= attr_i64(f, "stats_nrhs", s->nrhs);
-        rc |= attr_i64(f, "stats_nsteps", s->nsteps);
-        rc |= attr_i64(f, "stats_nrejected", s->nrejected);
-        rc |= attr_i64(f, "stats_nevents", s->nevents);
-        rc |= attr_i64(f, "stats_nlocate_steps", s->nlocate_steps);
-        rc |= attr_i64(f, "stats_nwarn_geom", s->nwarn_geom);
-        rc |= attr_i64(f, "stats_nwarn_dwell", s->nwarn_dwell);
-        rc |= attr_i64(f, "stats_nrenorm", s->nrenorm);
-        rc |= attr_f64(f, "stats_h_last", s->h_last);
-        rc |= attr_f64(f, "stats_h_min", s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0);
-        rc |= attr_f64(f, "stats_h_max", s->h_max_seen);
-    }
-    {
-        char when[64];
-        utc_now(when, sizeof when);
-        rc |= attr_str(f, "closed_utc", when);
-    }
-    if (rc) {
-        w->failed = 1;
-        seterr(err, CD_EIO, "HDF5: writing the final attributes failed");
-        st = CD_EIO;
+    if (!w->failed && !w->stopped) {
+        /* the last events (logged after the last sample) still belong in the table */
+        if (d && m && take_events(w, d) < 0) {
+            seterr(err, CD_ENOMEM, "out of memory buffering events");
+            st = CD_ENOMEM;
+        }
+        if (commit(w, st == CD_OK ? err : &tmp) != CD_OK && st == CD_OK) st = CD_EIO;
     } else {
-        st = commit(w, err);
+        st = refused(w, err);
+    }
+    /* a writer stopped by the space check writes these (a few kB, most in
+     * place) if there is still room for them */
+    if (!w->failed && (!w->stopped || check_space(w, 65536.0, tmp.msg, sizeof tmp.msg) == 0)) {
+        if (d) {
+            const cd_stats *s = &d->stats;
+            rc |= attr_f64(f, "t_final", d->t);
+            rc |= attr_i64(f, "stats_nrhs", s->nrhs);
+            rc |= attr_i64(f, "stats_nsteps", s->nsteps);
+            rc |= attr_i64(f, "stats_nrejected", s->nrejected);
+            rc |= attr_i64(f, "stats_nevents", s->nevents);
+            rc |= attr_i64(f, "stats_nlocate_steps", s->nlocate_steps);
+            rc |= attr_i64(f, "stats_nwarn_geom", s->nwarn_geom);
+            rc |= attr_i64(f, "stats_nwarn_dwell", s->nwarn_dwell);
+            rc |= attr_i64(f, "stats_nrenorm", s->nrenorm);
+            rc |= attr_f64(f, "stats_h_last", s->h_last);
+            rc |= attr_f64(f, "stats_h_min", s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0);
+            rc |= attr_f64(f, "stats_h_max", s->h_max_seen);
+        }
+        {
+            char when[64];
+            utc_now(when, sizeof when);
+            rc |= attr_str(f, "closed_utc", when);
+        }
+        if (rc || H5Fflush(f, H5F_SCOPE_GLOBAL) < 0) {
+            if (st == CD_OK) st = write_failed(w, err, "writing the final statistics");
+            else w->failed = 1;
+        } else {
+            /* the status last. A run whose last samples could not be
+             * committed is never reported as a success: the writer's error
+             * is the status, with how the run itself ended after it. */
+            cd_status fst = run_status;
+            const char *fmsg = message ? message : "";
+            char both[CD_H5_MESSAGE_LEN];
+            if (st != CD_OK) {
+                fst = st;
+                if (run_status == CD_OK || strcmp(fmsg, err->msg) == 0)
+                    snprintf(both, sizeof both, "%s", err->msg);
+                else
+                    snprintf(both, sizeof both, "%s (the run: %s: %s)", err->msg, cd_status_string(run_status), fmsg);
+                fmsg = both;
+            }
+            if (attr_str_fixed(f, "run_status", cd_status_string(fst), CD_H5_STATUS_LEN) < 0 ||
+                attr_int(f, "run_status_code", (int)fst) < 0 ||
+                attr_str_fixed(f, "run_message", fmsg, CD_H5_MESSAGE_LEN) < 0 ||
+                H5Fflush(f, H5F_SCOPE_GLOBAL) < 0) {
+                if (st == CD_OK) st = write_failed(w, err, "writing the run status");
+                else w->failed = 1;
+            }
+        }
     }
     writer_free(w);
     cd_h5_quiet_end(&q);

@@ -11,6 +11,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 
 #define seterr cd_error_set
@@ -334,6 +335,48 @@ static int read_static(cd_h5r *r)
     return rc ? -1 : 0;
 }
 
+/* Why HDF5 would not open path. The one damage a capdyn run leaves is a
+ * truncated file: a write that failed (disk full, quota, file size limit)
+ * after HDF5 had recorded the larger end-of-file address in the superblock.
+ * The superblock (at offset 0, little-endian) says where the file ends:
+ * end-of-file address at byte 40 (version 0), 44 (version 1) or 28
+ * (versions 2 and 3), with 8-byte addresses. */
+static void diagnose(const char *path, cd_error *err)
+{
+    static const unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    unsigned char b[64];
+    FILE *fp = fopen(path, "rb");
+    struct stat st;
+    size_t n;
+    int off;
+    unsigned long long eoa = 0;
+    if (!fp) {
+        seterr(err, CD_EIO, "cannot open '%s': no such file or not readable", path);
+        return;
+    }
+    n = fread(b, 1, sizeof b, fp);
+    fclose(fp);
+    if (n < 8 || memcmp(b, sig, 8) != 0) {
+        seterr(err, CD_EIO, "cannot open '%s': not an HDF5 file", path);
+        return;
+    }
+    off = b[8] == 0 ? 40 : b[8] == 1 ? 44 : (b[8] == 2 || b[8] == 3) ? 28 : -1;
+    if (off > 0 && n >= (size_t)off + 8 && (b[8] >= 2 || b[13] == 8) && stat(path, &st) == 0) {
+        int i;
+        for (i = 7; i >= 0; i--) eoa = (eoa << 8) | b[off + i];
+        if (eoa > (unsigned long long)st.st_size) {
+            seterr(err, CD_EIO,
+                   "cannot open '%s': the file is truncated (%llu of the %llu bytes its header names), as a "
+                   "run whose writing failed (disk full, quota, file size limit) leaves it; "
+                   "'h5clear --increment=0 %s' makes its committed samples readable",
+                   path, (unsigned long long)st.st_size, eoa, path);
+            return;
+        }
+    }
+    seterr(err, CD_EIO, "cannot open '%s': a damaged HDF5 file (if its run failed writing it, try "
+           "'h5clear --increment=0 %s' on a copy)", path, path);
+}
+
 cd_h5r *cd_h5r_open(const char *path, cd_error *err)
 {
     cd_h5_quiet q;
@@ -349,12 +392,7 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
     H5Pclose(fapl);
     cd_h5_quiet_end(&q);
     if (f < 0) {
-        FILE *probe = fopen(path, "rb");
-        if (!probe) seterr(err, CD_EIO, "cannot open '%s': no such file or not readable", path);
-        else {
-            fclose(probe);
-            seterr(err, CD_EIO, "cannot open '%s': not an HDF5 file, or damaged", path);
-        }
+        diagnose(path, err);
         return NULL;
     }
     r = calloc(1, sizeof *r);

@@ -27,6 +27,7 @@
 #include "../math/cd_math.h"
 
 #include <toml++/toml.h>
+#include <sys/stat.h>
 
 #include <algorithm>
 #include <cctype>
@@ -307,6 +308,37 @@ void merge_into(Node &base, Node &over)
     }
 }
 
+/* The most samples a run may ask for: duration / output_dt <= 1e9. */
+const double CD_SCENARIO_MAX_SAMPLES = 1e9;
+/* The largest scenario file (main or included) the loader reads. */
+const unsigned long long CD_SCENARIO_MAX_BYTES = 16ull << 20;
+
+std::string file_kind(mode_t m)
+{
+    if (S_ISDIR(m)) return "a directory";
+    if (S_ISCHR(m)) return "a character device";
+    if (S_ISBLK(m)) return "a block device";
+    if (S_ISFIFO(m)) return "a FIFO";
+    if (S_ISSOCK(m)) return "a socket";
+    return "not a plain file";
+}
+
+std::string too_large(unsigned long long bytes)
+{
+    char b[160];
+    std::snprintf(b, sizeof b, "%.1f MiB (%llu bytes), more than the %llu MiB a scenario file may have",
+                  (double)bytes / 1048576.0, bytes, CD_SCENARIO_MAX_BYTES >> 20);
+    return b;
+}
+
+/* A scenario file that cannot be read: CD_EIO, located at the include entry
+ * that named it (from; NULL for the main file). */
+[[noreturn]] void refuse(const std::string &path, const Loc *from, const std::string &from_key, const std::string &why)
+{
+    if (!from) throw LoadError{CD_EIO, "cannot read scenario file '" + path + "': " + why};
+    fail_at(*from, from_key, "cannot read included file '" + path + "': " + why, CD_EIO);
+}
+
 struct FileLoader {
     std::string text;                /* main file, then each include with a header line */
     std::vector<std::string> stack;  /* canonical paths being loaded (cycle detection) */
@@ -329,26 +361,29 @@ struct FileLoader {
                 for (size_t j = i; j < stack.size(); j++) cyc += stack[j] + " -> ";
                 fail_at(*from, from_key, "include cycle: " + cyc + cpath);
             }
-        /* read the whole file */
+        /* read the whole file: a regular file of at most CD_SCENARIO_MAX_BYTES
+         * (a device such as /dev/zero, a FIFO or a directory would make the
+         * read hang, never end or fail obscurely) */
         std::string content;
         {
+            struct stat sb;
+            if (::stat(path.c_str(), &sb) != 0) refuse(path, from, from_key, std::strerror(errno));
+            if (!S_ISREG(sb.st_mode)) refuse(path, from, from_key, "not a regular file (" + file_kind(sb.st_mode) + ")");
+            if ((unsigned long long)sb.st_size > CD_SCENARIO_MAX_BYTES)
+                refuse(path, from, from_key, too_large((unsigned long long)sb.st_size));
             FILE *f = std::fopen(path.c_str(), "rb");
-            if (!f) {
-                int e = errno;
-                if (!from)
-                    throw LoadError{CD_EIO, "cannot read scenario file '" + path + "': " + std::strerror(e)};
-                fail_at(*from, from_key, "cannot read included file '" + path + "': " + std::strerror(e),
-                        CD_EIO);
-            }
+            if (!f) refuse(path, from, from_key, std::strerror(errno));
             char buf[65536];
             size_t n;
-            while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) content.append(buf, n);
+            bool big = false;
+            while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
+                content.append(buf, n);
+                if (content.size() > CD_SCENARIO_MAX_BYTES) { big = true; break; } /* it grew since stat */
+            }
             bool bad = std::ferror(f) != 0;
             std::fclose(f);
-            if (bad) {
-                if (!from) throw LoadError{CD_EIO, "cannot read scenario file '" + path + "': read error"};
-                fail_at(*from, from_key, "cannot read included file '" + path + "': read error", CD_EIO);
-            }
+            if (big) refuse(path, from, from_key, too_large((unsigned long long)content.size()));
+            if (bad) refuse(path, from, from_key, "read error");
         }
         if (from) text += "\n# ---- included file: " + path + " ----\n";
         text += content;
@@ -1305,6 +1340,15 @@ struct Builder {
             o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
             o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
             run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
+            /* the sample count must be a sane integer (the CLI converts it) */
+            if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
+                Entry *e = t.get("output_dt");
+                if (!e) e = t.get("duration");
+                fail_at(e ? e->val->loc : sn.loc, t.kp("output_dt"),
+                        "expected a value in [duration / 1e9, inf) = [" + fmt_num(run.duration / CD_SCENARIO_MAX_SAMPLES) +
+                            ", inf) s (at most 1e9 samples for duration = " + fmt_num(run.duration) + " s), got " +
+                            fmt_num(run.output_dt));
+            }
             run.flush_every = t.num("flush_every", 1.0, Range::Pos);
             if (Entry *e = t.get("event_capacity")) {
                 long long v = int_of(*e->val, t.kp("event_capacity"), 1);
