@@ -13,6 +13,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
+#include "scene_util.h"
 #include <gsl/gsl_integration.h>
 #include <gsl/gsl_sf_gamma.h>
 #include <math.h>
@@ -28,31 +29,7 @@ static double now_s(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
-static int add_system(cd_model *m, const char *name, cd_base_type type, double mass, double inertia,
-                      const double pos[3], const double vel[3])
-{
-    cd_error e;
-    cd_system_desc s = cd_system_desc_default();
-    int id;
-    s.name = name;
-    s.type = type;
-    s.mass = mass;
-    memset(s.inertia, 0, sizeof s.inertia);
-    s.inertia[0] = s.inertia[4] = s.inertia[8] = inertia;
-    if (pos) memcpy(s.pos, pos, sizeof s.pos);
-    if (vel) memcpy(s.vel, vel, sizeof s.vel);
-    id = cd_model_add_system(m, &s, &e);
-    cr_assert(id >= 0, "%s", e.msg);
-    return id;
-}
 
-static int add_plane(cd_model *m, int body)
-{
-    cd_error e;
-    int sh = cd_model_add_shape(m, body, CD_SHAPE_PLANE, NULL, NULL, NULL, NULL, 0, &e);
-    cr_assert(sh >= 0, "%s", e.msg);
-    return sh;
-}
 
 /* normal law only: frictionless (mu_s = mu_k = 0 is accepted by the model;
  * K_t must be > 0 and is irrelevant here) */
@@ -81,11 +58,11 @@ static scene ball_scene(double mass, double r, double gap, double v0, const cd_c
     int ground, plane, lid;
     sc.m = cd_model_create();
     cr_assert(sc.m);
-    ground = add_system(sc.m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL);
+    ground = add_system(sc.m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
     plane = add_plane(sc.m, sc.m->sys_body_adr[ground]);
     pos[2] = r + gap;
     vel[2] = -v0;
-    sc.ball = add_system(sc.m, "ball", CD_BASE_FREE, mass, 0.4 * mass * r * r, pos, vel);
+    sc.ball = add_system(sc.m, "ball", CD_BASE_FREE, mass, 0.4 * mass * r * r, pos, vel, NULL);
     cr_assert(cd_model_add_checkpoint(sc.m, sc.m->sys_body_adr[sc.ball], zero, r, &e) >= 0, "%s", e.msg);
     lid = cd_model_add_law(sc.m, law, &e);
     cr_assert(lid >= 0, "the model accepts mu_s = mu_k = 0: %s", e.msg);
@@ -291,11 +268,11 @@ static fig3_scene fig3_build(void)
     int wall, plane, lid;
     f.m = cd_model_create();
     cr_assert(f.m);
-    wall = add_system(f.m, "wall", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL);
+    wall = add_system(f.m, "wall", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
     plane = add_plane(f.m, f.m->sys_body_adr[wall]);
     pos[2] = arm + F3_GAP;
     vel[2] = -F3_V0;
-    f.carrier = add_system(f.m, "carrier", CD_BASE_FREE, F3_M, 0.1, pos, vel);
+    f.carrier = add_system(f.m, "carrier", CD_BASE_FREE, F3_M, 0.1, pos, vel, NULL);
     l.name = "front";
     l.parent = f.m->sys_body_adr[f.carrier];
     l.type = CD_JOINT_PRISMATIC;

@@ -8,6 +8,7 @@
  * reactions produce accelerations below 1e-13 m/s^2. */
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
+#include "scene_util.h"
 #include <math.h>
 #include <string.h>
 
@@ -15,41 +16,8 @@ static const double G = 9.81;
 
 static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
 
-static int add_system(cd_model *m, const char *name, cd_base_type type, double mass, double inertia,
-                      const double pos[3], const double vel[3], const double angvel[3])
-{
-    cd_error e;
-    cd_system_desc s = cd_system_desc_default();
-    int id;
-    s.name = name;
-    s.type = type;
-    s.mass = mass;
-    memset(s.inertia, 0, sizeof s.inertia);
-    s.inertia[0] = s.inertia[4] = s.inertia[8] = inertia;
-    if (pos) memcpy(s.pos, pos, sizeof s.pos);
-    if (vel) memcpy(s.vel, vel, sizeof s.vel);
-    if (angvel) memcpy(s.angvel, angvel, sizeof s.angvel);
-    id = cd_model_add_system(m, &s, &e);
-    cr_assert(id >= 0, "%s", e.msg);
-    return id;
-}
 
-static int add_point(cd_model *m, int body)
-{
-    cd_error e;
-    double z[3] = {0, 0, 0};
-    int cp = cd_model_add_checkpoint(m, body, z, 0.0, &e);
-    cr_assert(cp >= 0, "%s", e.msg);
-    return cp;
-}
 
-static int add_plane(cd_model *m, int body)
-{
-    cd_error e;
-    int sh = cd_model_add_shape(m, body, CD_SHAPE_PLANE, NULL, NULL, NULL, NULL, 0, &e);
-    cr_assert(sh >= 0, "%s", e.msg);
-    return sh;
-}
 
 static cd_contact_law law_for(double mass, double K, double Kt, double mu_s, double mu_k)
 {

@@ -17,6 +17,7 @@
 #include <hdf5.h>
 #include "../src/io/h5_read.h"
 #include "../src/io/h5_util.h"
+#include "h5_test_util.h"
 #include <math.h>
 #include <signal.h>
 #include <stdio.h>
@@ -137,64 +138,8 @@ static hid_t open_ro(const char *path)
     return f;
 }
 
-static long long attr_ll(hid_t obj, const char *name)
-{
-    long long v = -1;
-    hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
-    cr_assert(a >= 0, "attribute %s", name);
-    cr_assert(H5Aread(a, H5T_NATIVE_LLONG, &v) >= 0);
-    H5Aclose(a);
-    return v;
-}
 
-static void attr_s(hid_t obj, const char *name, char *out, size_t n)
-{
-    hid_t a = H5Aopen(obj, name, H5P_DEFAULT), t, mt;
-    size_t sz;
-    char *tmp;
-    cr_assert(a >= 0, "attribute %s", name);
-    t = H5Aget_type(a);
-    sz = H5Tget_size(t);
-    mt = H5Tcopy(t); /* the file's own string type: its character set (UTF-8) */
-    H5Tset_size(mt, sz);
-    tmp = calloc(1, sz + 1);
-    cr_assert(H5Aread(a, mt, tmp) >= 0);
-    snprintf(out, n, "%s", tmp);
-    free(tmp);
-    H5Tclose(mt);
-    H5Tclose(t);
-    H5Aclose(a);
-}
 
-/* Dimensions of a dataset; returns its rank. */
-static int dims_of(hid_t f, const char *path, hsize_t d[3])
-{
-    hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
-    int r;
-    cr_assert(ds >= 0, "dataset %s", path);
-    sp = H5Dget_space(ds);
-    d[0] = d[1] = d[2] = 0;
-    r = H5Sget_simple_extent_dims(sp, d, NULL);
-    H5Sclose(sp);
-    H5Dclose(ds);
-    return r;
-}
-
-static double *read_all(hid_t f, const char *path, size_t *n)
-{
-    hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
-    hssize_t np;
-    double *v;
-    cr_assert(ds >= 0, "dataset %s", path);
-    sp = H5Dget_space(ds);
-    np = H5Sget_simple_extent_npoints(sp);
-    v = malloc((size_t)(np > 0 ? np : 1) * sizeof *v);
-    if (np > 0) cr_assert(H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
-    H5Sclose(sp);
-    H5Dclose(ds);
-    *n = (size_t)np;
-    return v;
-}
 
 /* Runs the scene to t_end appending a sample every dt (the CLI's loop). */
 static void run_sampled(scene *r, cd_h5_writer *w, double t_end, double dt, int flush_every_n)
