@@ -38,10 +38,9 @@ typedef struct {
     cd_data *d;
     gsl_odeiv2_system sys;
     gsl_odeiv2_driver *drv;   /* adaptive steppers (NULL in fixed mode) */
-    gsl_odeiv2_step *loc;     /* one-step locator (also the fixed-mode stepper) */
+    gsl_odeiv2_step *loc;     /* rk8pd one-step locator (adaptive modes; NULL in fixed mode) */
     double *y0, *ylo, *yhi, *yerr, *fd_f0, *fd_y;
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
-    double *g;                /* (2 nslot) switching functions scratch */
     int *nswitch_now;         /* (nslot) switches within `dwell` of the slot's last one */
     double h;                 /* next trial step */
     int fixed;
@@ -94,7 +93,7 @@ void cd_integ_free(void *p)
     if (I->drv) gsl_odeiv2_driver_free(I->drv);
     if (I->loc) gsl_odeiv2_step_free(I->loc);
     free(I->y0); free(I->ylo); free(I->yhi); free(I->yerr); free(I->fd_f0); free(I->fd_y);
-    free(I->g); free(I->nswitch_now);
+    free(I->nswitch_now);
     free(I->k1); free(I->k2); free(I->k3); free(I->k4); free(I->ytmp);
     free(I);
 }
@@ -142,9 +141,8 @@ void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err)
     I->y0 = calloc(n, sizeof(double)); I->ylo = calloc(n, sizeof(double));
     I->yhi = calloc(n, sizeof(double)); I->yerr = calloc(n, sizeof(double));
     I->fd_f0 = calloc(n, sizeof(double)); I->fd_y = calloc(n, sizeof(double));
-    I->g = calloc((size_t)(2 * ns), sizeof(double));
     I->nswitch_now = calloc((size_t)ns, sizeof(int));
-    if (!I->y0 || !I->ylo || !I->yhi || !I->yerr || !I->fd_f0 || !I->fd_y || !I->g || !I->nswitch_now)
+    if (!I->y0 || !I->ylo || !I->yhi || !I->yerr || !I->fd_f0 || !I->fd_y || !I->nswitch_now)
         goto nomem;
     return I;
 nomem:
@@ -227,15 +225,24 @@ static void any_tangent(double t[3], const double n[3])
 
 /* Applies the transition that slot k's switching functions call for, at the
  * current (landed) state, after cd_forward. Returns 1 if the mode changed. */
+/* Slot k's switching functions (cd_contact_switch). With forgive, zero-time
+ * re-checks pardon round-off in the friction functions (e.g. slip -> stick
+ * with mu_s = mu_k lands exactly on the cone and must not flip straight back). */
+static void switch_functions(const cd_model *m, const cd_data *d, int k, int forgive, double *gn, double *gf)
+{
+    int mode = d->slot_mode[k];
+    cd_contact_switch(m, d, k, gn, gf);
+    if (forgive && mode == CD_MODE_STICK && *gf >= -1e-9 * m->law[m->slot_law[k]].mu_s * d->slot_fn[k]) *gf = 0;
+    if (forgive && mode == CD_MODE_SLIP && *gf >= -1e-3 * m->opt.v_reg) *gf = 0;
+}
+
 static int switch_slot(const cd_model *m, cd_data *d, int k, int forgive)
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double gn, gf, *z = d->y + m->ny_slot_adr + 3 * k;
     const double *n = d->slot_normal + 3 * k, *ft = d->slot_ft + 3 * k, *vt = d->slot_vt + 3 * k;
     int from = d->slot_mode[k], to = from, kind = -1;
-    cd_contact_switch(m, d, k, &gn, &gf);
-    if (forgive && from == CD_MODE_STICK && gf >= -1e-9 * L->mu_s * d->slot_fn[k]) gf = 0;
-    if (forgive && from == CD_MODE_SLIP && gf >= -1e-3 * m->opt.v_reg) gf = 0;
+    switch_functions(m, d, k, forgive, &gn, &gf);
     if (gn < 0) {
         if (from == CD_MODE_OPEN) { to = CD_MODE_STICK; kind = CD_EV_ONSET; }
         else { to = CD_MODE_OPEN; kind = CD_EV_SEPARATION; }
@@ -273,6 +280,17 @@ static int switch_slot(const cd_model *m, cd_data *d, int k, int forgive)
     return 1;
 }
 
+/* switch_slot under the chattering guard's bookkeeping: switches more than
+ * `dwell` apart start a new count; the second within the window holds the
+ * slot (its forces clipped, its functions unwatched) until the window ends. */
+static int counted_switch(const cd_model *m, cd_data *d, cd_integ *I, int k, int forgive)
+{
+    if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
+    if (!switch_slot(m, d, k, forgive)) return 0;
+    if (++I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
+    return 1;
+}
+
 /* Switch every slot whose functions are negative at the current state, with
  * zero-time cascades (e.g. onset -> slip) bounded by the chattering guard. */
 static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *changed)
@@ -290,19 +308,10 @@ static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *c
         for (k = 0; k < m->nslot; k++) {
             double gn, gf;
             if (d->slot_geomfail[k]) continue;
-            cd_contact_switch(m, d, k, &gn, &gf);
-            /* zero-time re-checks forgive round-off in the friction functions
-             * (e.g. slip -> stick with mu_s = mu_k lands exactly on the cone) */
-            if (d->slot_mode[k] == CD_MODE_STICK && gf >= -1e-9 * m->law[m->slot_law[k]].mu_s * d->slot_fn[k]) gf = 0;
-            if (d->slot_mode[k] == CD_MODE_SLIP && gf >= -1e-3 * m->opt.v_reg) gf = 0;
+            switch_functions(m, d, k, 1, &gn, &gf);
             if (!(gn < 0 || gf < 0)) continue;
-            if (d->t - d->slot_tswitch[k] < m->opt.dwell && I->nswitch_now[k] >= 2) { d->stats.nwarn_dwell++; continue; }
-            if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
-            if (switch_slot(m, d, k, 1)) {
-                I->nswitch_now[k]++;
-                if (I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
-                any = 1;
-            }
+            if (in_dwell(m, d, I, k)) { d->stats.nwarn_dwell++; continue; }
+            if (counted_switch(m, d, I, k, 1)) any = 1;
         }
         if (!any) break;
         *changed = 1;
@@ -366,8 +375,6 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
     return st == CD_OK ? CD_OK : CD_ENUMERIC;
 }
 
-/* Locate the first zero of gmin in (0, h] given gmin(0) >= 0 > gmin(h), and
- * leave d at the upper end of the final bracket (on the new side). */
 /* Back to the start of the step after a failure: d holds the last good
  * state (y0 at t0) with its outputs evaluated, as cd_sim_advance promises. */
 static void restore_start(const cd_model *m, cd_data *d, const cd_integ *I, double t0, double *ystate)
@@ -378,6 +385,8 @@ static void restore_start(const cd_model *m, cd_data *d, const cd_integ *I, doub
     (void)cd_forward(m, d);
 }
 
+/* Locate the first zero of gmin in (t0, t1] given gmin(t0) >= 0 > gmin(t1),
+ * and leave d at the upper end of the final bracket (on the new side). */
 static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
                         int *trigger)
 {
@@ -490,9 +499,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             if (status == GSL_SUCCESS) d->t = t;
         }
         if (status != GSL_SUCCESS) {
-            memcpy(d->y, I->y0, (size_t)m->ny * sizeof(double));
-            d->t = t0;
-            (void)cd_forward(m, d);
+            restore_start(m, d, I, t0, d->y);
             if (status == GSL_EBADFUNC) {
                 seterr(err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
                 return CD_ENUMERIC;
@@ -509,9 +516,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         st = cd_forward(m, d);
         d->stats.nrhs++;
         if (st != CD_OK) {
-            memcpy(d->y, I->y0, (size_t)m->ny * sizeof(double));
-            d->t = t0;
-            (void)cd_forward(m, d);
+            restore_start(m, d, I, t0, d->y);
             seterr(err, CD_ENUMERIC, "non-finite state after a step", t0);
             return CD_ENUMERIC;
         }
@@ -523,14 +528,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             if (st != CD_OK) { seterr(err, st, "event location failed", t0); return st; }
             renormalize(m, d);
             /* the slot that crossed switches unconditionally (it is on the new side) */
-            if (trig >= 0) {
-                int k = trig / 2;
-                if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
-                if (switch_slot(m, d, k, 0)) {
-                    I->nswitch_now[k]++;
-                    if (I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
-                }
-            }
+            if (trig >= 0) (void)counted_switch(m, d, I, trig / 2, 0);
             st = settle_modes(m, d, I, &changed);
             if (st != CD_OK) { seterr(err, st, "non-finite state at an event", d->t); return st; }
             if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
