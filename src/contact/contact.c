@@ -44,7 +44,7 @@ static void shape_pose(const cd_model *m, const cd_data *d, int sh, double R[9],
     cd_v3_add(x, d->body_x + 3 * b, t);
 }
 
-/* query in world coordinates; returns 0 ok, 1 separated (libccd, d lower bound), -1 bad */
+/* query in world coordinates (n, s in world); returns 0, or -1 for a rejected (non-finite) answer */
 static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r,
                        double *dist, double n[3], double s[3])
 {
