@@ -218,7 +218,7 @@ static double hermite_root(double t0, double q0, double v0, double t1, double q1
     return t0 + 0.5 * (lo + hi) * h;
 }
 
-static int pend_cb(const cd_model *m, const cd_data *d, void *user)
+static int pend_cb(const cd_model *m, cd_data *d, void *user)
 {
     pend_mon *pm = (pend_mon *)user;
     double q = cd_joint_q(m, d, 1), qd = cd_joint_qd(m, d, 1), ke, E;
@@ -557,7 +557,7 @@ static void mom_sample(const cd_model *m, const cd_data *d, mom_mon *mm, int ini
     mm->nsample++;
 }
 
-static int mom_cb(const cd_model *m, const cd_data *d, void *user)
+static int mom_cb(const cd_model *m, cd_data *d, void *user)
 {
     mom_sample(m, d, (mom_mon *)user, 0);
     return 0;
@@ -758,7 +758,7 @@ typedef struct {
     long n;
 } rb_mon;
 
-static int rb_cb(const cd_model *m, const cd_data *d, void *user)
+static int rb_cb(const cd_model *m, cd_data *d, void *user)
 {
     rb_mon *r = (rb_mon *)user;
     double wb[3], wa[3], ke, L[3];
@@ -1011,7 +1011,7 @@ Test(dynamics, nan_user_wrench_returns_enumeric)
     cd_error e;
     cd_status st;
     memset(&e, 0, sizeof e);
-    d->body_fuser[6 * 1 + 3] = NAN;
+    d->xfrc_applied[6 * 1 + 3] = NAN;
     st = cd_sim_advance(m, d, 1.0, NULL, NULL, &e);
     cr_expect(st == CD_ENUMERIC, "status %s (%s)", cd_status_string(st), e.msg);
     cr_expect(e.status == CD_ENUMERIC && e.msg[0] != 0, "error report not filled");
@@ -1023,11 +1023,11 @@ Test(dynamics, nan_user_wrench_returns_enumeric)
 
 /* The user pointer is the (writable) data: after t = 0.5 s the callback
  * poisons a user wrench, as a controller with a bug would. */
-static int poison_cb(const cd_model *m, const cd_data *dc, void *user)
+static int poison_cb(const cd_model *m, cd_data *dc, void *user)
 {
     cd_data *d = (cd_data *)user;
     (void)m;
-    if (dc->t >= 0.5) d->body_fuser[6 * 1 + 0] = NAN;
+    if (dc->t >= 0.5) d->xfrc_applied[6 * 1 + 0] = NAN;
     return 0;
 }
 
@@ -1350,7 +1350,15 @@ Test(dynamics, numerically_singular_mass_matrix_is_reported_not_fatal)
     l.qd0 = 1.0;
     add_link(m, s, &l);
     finalize(m);
-    d = mkdata(m);
+    /* either data creation reports the initial state as not evaluable, or it
+     * succeeds and the run reports (never an abort) */
+    d = cd_data_create(m, 0, &e);
+    if (!d) {
+        cr_expect_eq(e.status, CD_ENUMERIC, "data_create: %s", e.msg);
+        cr_expect(strstr(e.msg, "initial state") != NULL, "message: %s", e.msg);
+        cd_model_free(m);
+        return;
+    }
     st = cd_forward(m, d);
     for (i = 0; i < m->nv; i++) finite = finite && isfinite(d->udot[i]);
     cr_expect(st == CD_ENUMERIC || (st == CD_OK && finite), "cd_forward: %s", cd_status_string(st));
@@ -1411,7 +1419,10 @@ Test(dynamics, rk4_fixed_step_is_the_classic_four_stage_method)
     cr_expect_lt(fabs(v - r[1]), 1e-14, "v = %.17g, RK4 %.17g", v, r[1]);
     nrhs0 = d->stats.nrhs;
     cr_assert_eq(cd_sim_advance(m, d, 101 * h, NULL, NULL, &e), CD_OK, "%s", e.msg);
-    cr_expect_eq(d->stats.nrhs - nrhs0, 100 * 5 + 1, "evaluations for 100 steps: %ld", d->stats.nrhs - nrhs0);
+    /* 4 per step: the end-of-step evaluation (made anyway, for the switching
+     * functions) is the next step's first stage; no re-check on entry since
+     * nothing changed between the calls */
+    cr_expect_eq(d->stats.nrhs - nrhs0, 100 * 4, "evaluations for 100 steps: %ld", d->stats.nrhs - nrhs0);
     cd_data_free(d);
     cd_model_free(m);
 }

@@ -3,7 +3,7 @@
  * The sliding "block" is a point contact: a check point of radius 0 at the
  * block's CoM, so friction exerts no moment and the motion is the textbook
  * particle-on-a-surface one. Loads that must act on the block only (a normal
- * load) are user wrenches (d->body_fuser); surfaces that move (a slowly
+ * load) are user wrenches (d->xfrc_applied); surfaces that move (a slowly
  * tilting slope, a belt) are free bodies of 1e15 kg, on which the contact
  * reactions produce accelerations below 1e-13 m/s^2. */
 #include <criterion/criterion.h>
@@ -186,7 +186,7 @@ Test(friction, slowly_tilted_slope_breaks_loose_on_time)
     d = cd_data_create(m, 0, &e);
     cr_assert(d, "%s", e.msg);
     /* block velocity must match the slope surface's at t = 0: the block sits on the axis, v = 0 */
-    d->body_fuser[6 * m->sys_body_adr[block] + 5] = -mass * G;
+    d->xfrc_applied[6 * m->sys_body_adr[block] + 5] = -mass * G;
     tstar = (atan(0.5) - th0) / w;
     cr_assert_eq(cd_sim_advance(m, d, tstar + 0.5, NULL, NULL, &e), CD_OK, "%s", e.msg);
     for (i = 0; i < d->ev_count; i++)
@@ -253,7 +253,7 @@ static belt_result run_belt(double kt_ratio)
     finalize(m);
     d = cd_data_create(m, 0, &e);
     cr_assert(d, "%s", e.msg);
-    d->body_fuser[6 * bz + 5] = -N;
+    d->xfrc_applied[6 * bz + 5] = -N;
     /* the block starts at rest on the moving belt: it slips at once, then
      * falls into the limit cycle; measure the last full cycle after 5 s */
     cr_assert_eq(cd_sim_advance(m, d, 6.0, NULL, NULL, &e), CD_OK, "%s", e.msg);

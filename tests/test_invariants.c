@@ -146,12 +146,12 @@ Test(invariants, bit_identical_across_runs_and_data)
     cr_expect_eq(memcmp(a->y, b->y, (size_t)m->ny * sizeof(double)), 0, "two data, one model");
     cr_expect_eq(a->ev_count, b->ev_count);
     memcpy(ya, a->y, (size_t)m->ny * sizeof(double));
-    cd_data_reset(m, a);
+    cd_data_reset(m, a, NULL);
     cr_assert_eq(cd_sim_advance(m, a, 0.3, NULL, NULL, &e), CD_OK, "%s", e.msg);
     /* one long advance vs slices: the same steps are not guaranteed (t_end
      * clamps a step), so only the slice-vs-slice comparison is bitwise */
     cr_expect_lt(fabs(a->y[0] - ya[0]), 1e-6, "slicing changes results only within tolerance");
-    cd_data_reset(m, b);
+    cd_data_reset(m, b, NULL);
     for (t = 0.05; t <= 0.3001; t += 0.05) cd_sim_advance(m, b, t, NULL, NULL, &e);
     cr_expect_eq(memcmp(b->y, ya, (size_t)m->ny * sizeof(double)), 0, "rerun after reset is bit-identical");
     free(ya);

@@ -509,7 +509,7 @@ Test(model, actuator_rejections)
     clear(&e);
     cr_expect(cd_model_set_actuator(m, 2, &a, &e) == CD_OK, "valid table rejected: %s", e.msg);
     tv[1] = 99;
-    cr_expect(m->ntbl == 2 && m->tbl_v[m->body_tbl_adr[2] + 1] == 1.0, "table not copied");
+    cr_expect(m->ntbl == 2 && m->tbl_v[m->act_tbl_adr[m->body_act[2]] + 1] == 1.0, "table not copied");
     cd_model_free(m);
 }
 

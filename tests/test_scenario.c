@@ -25,6 +25,10 @@
 #include <string.h>
 #include <unistd.h>
 
+/* the actuator cd_model_set_actuator made for joint body b (CD_ACT_NONE: none) */
+#define ACT_TYPE(m, b) ((m)->body_act[b] >= 0 ? (m)->act_type[(m)->body_act[b]] : CD_ACT_NONE)
+#define ACT_PRM(m, b) ((m)->act_prm + 4 * (m)->body_act[b])
+
 #define PI 3.14159265358979323846
 #define DEG (PI / 180.0)
 
@@ -576,24 +580,24 @@ Test(scenario_roundtrip, every_documented_key)
         near(m->body_q0[b_l2], 0.0, R1, "l2 default q0");
     }
     /* actuators */
-    cr_assert_eq(m->body_act_type[b_l1], CD_ACT_TABLE);
-    cr_assert_eq(m->body_tbl_n[b_l1], 3);
+    cr_assert_eq(ACT_TYPE(m, b_l1), CD_ACT_TABLE);
+    cr_assert_eq(m->act_tbl_n[m->body_act[b_l1]], 3);
     {
         double t[3] = {0, 1, 2}, v[3] = {0, 2, -1};
-        near_n(m->tbl_t + m->body_tbl_adr[b_l1], t, 3, R1, "table t");
-        near_n(m->tbl_v + m->body_tbl_adr[b_l1], v, 3, R1, "table tau");
+        near_n(m->tbl_t + m->act_tbl_adr[m->body_act[b_l1]], t, 3, R1, "table t");
+        near_n(m->tbl_v + m->act_tbl_adr[m->body_act[b_l1]], v, 3, R1, "table tau");
     }
-    cr_assert_eq(m->body_act_type[b_sl], CD_ACT_PD);
+    cr_assert_eq(ACT_TYPE(m, b_sl), CD_ACT_PD);
     {
         double a[4] = {0.5, 100, 2, 0.1}; /* tau0, kp, kd, qref */
         double b[4] = {0.0, 5, 0.1, 45 * DEG};
-        near_n(m->body_act + 4 * b_sl, a, 4, R1, "slider pd");
-        cr_assert_eq(m->body_act_type[b_l2], CD_ACT_PD);
-        near_n(m->body_act + 4 * b_l2, b, 4, R2, "l2 pd (qref_deg)");
+        near_n(ACT_PRM(m, b_sl), a, 4, R1, "slider pd");
+        cr_assert_eq(ACT_TYPE(m, b_l2), CD_ACT_PD);
+        near_n(ACT_PRM(m, b_l2), b, 4, R2, "l2 pd (qref_deg)");
     }
-    cr_assert_eq(m->body_act_type[b_l3], CD_ACT_CONSTANT);
-    near(m->body_act[4 * b_l3], 0.25, R1, "l3 tau");
-    cr_assert_eq(m->body_act_type[b_l4], CD_ACT_NONE);
+    cr_assert_eq(ACT_TYPE(m, b_l3), CD_ACT_CONSTANT);
+    near(ACT_PRM(m, b_l3)[0], 0.25, R1, "l3 tau");
+    cr_assert_eq(ACT_TYPE(m, b_l4), CD_ACT_NONE);
 
     /* check points: arm base 1, l1 2, sat 1 */
     cr_assert_eq(m->ncp, 4);
@@ -871,10 +875,10 @@ Test(scenario_files, fig5_geometry_is_the_benchmark_scene)
     /* joint axes: -z left, +z right, so a positive torque closes both */
     cr_assert(d->body_axisw[3 * l1 + 2] == -1 && d->body_axisw[3 * l2 + 2] == -1);
     cr_assert(d->body_axisw[3 * r1 + 2] == 1 && d->body_axisw[3 * r2 + 2] == 1);
-    cr_assert(m->body_act_type[l1] == CD_ACT_CONSTANT && m->body_act[4 * l1] == 0.2);
-    cr_assert(m->body_act_type[l2] == CD_ACT_CONSTANT && m->body_act[4 * l2] == 0.1);
-    cr_assert(m->body_act_type[r1] == CD_ACT_CONSTANT && m->body_act[4 * r1] == 0.2);
-    cr_assert(m->body_act_type[r2] == CD_ACT_CONSTANT && m->body_act[4 * r2] == 0.1);
+    cr_assert(ACT_TYPE(m, l1) == CD_ACT_CONSTANT && ACT_PRM(m, l1)[0] == 0.2);
+    cr_assert(ACT_TYPE(m, l2) == CD_ACT_CONSTANT && ACT_PRM(m, l2)[0] == 0.1);
+    cr_assert(ACT_TYPE(m, r1) == CD_ACT_CONSTANT && ACT_PRM(m, r1)[0] == 0.2);
+    cr_assert(ACT_TYPE(m, r2) == CD_ACT_CONSTANT && ACT_PRM(m, r2)[0] == 0.1);
     {
         double c[3] = {0.005, 0.075, 0};
         near_n(m->sys_pos0 + 3 * obj, c, 3, 1e-15, "cylinder position");
@@ -899,9 +903,9 @@ Test(scenario_files, fig3_parameters_give_the_stated_time_scales)
     const cd_model *m = sc->model;
     int front = cd_model_body_id(m, "carrier/front");
     double M = m->body_mass[m->sys_body_adr[0]], mf = m->body_mass[front];
-    double Ka = m->body_act[4 * front + 1], Kb = m->law[0].K;
+    double Ka = ACT_PRM(m, front)[1], Kb = m->law[0].K;
     cr_assert_eq(m->body_jnt_type[front], CD_JOINT_PRISMATIC);
-    cr_assert_eq(m->body_act_type[front], CD_ACT_PD);
+    cr_assert_eq(ACT_TYPE(m, front), CD_ACT_PD);
     /* slow phase ~ pi sqrt(M / K_a) ~ 0.2 s (the paper) within 2 % */
     near(PI * sqrt(M / Ka), 0.2, 0.004, "slow contact phase [s]"); /* 2 % of 0.2 s */
     cr_assert(M >= 50 * mf, "M >> m");
@@ -953,6 +957,6 @@ Test(scenario_files, free_floating_arm_has_no_gravity_nor_contact)
     cr_assert_eq(m->sys_base_type[0], CD_BASE_FREE);
     cr_assert_eq(m->body_mass[0], 100.0);
     cr_assert_geq(m->sys_nbody[0] - 1, 2);
-    for (k = 1; k < m->sys_nbody[0]; k++) cr_assert_eq(m->body_act_type[k], CD_ACT_TABLE);
+    for (k = 1; k < m->sys_nbody[0]; k++) cr_assert_eq(ACT_TYPE(m, k), CD_ACT_TABLE);
     cd_scenario_free(sc);
 }

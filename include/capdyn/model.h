@@ -25,7 +25,8 @@ typedef enum {
     CD_ESTALL,     /* integrator step size fell below h_min */
     CD_EMAXSTEPS,  /* the step budget (cd_options.max_steps) is spent */
     CD_EIO,        /* file input/output (io layer only) */
-    CD_EINTERRUPT  /* a caller's callback asked to stop */
+    CD_EINTERRUPT, /* a caller's callback asked to stop */
+    CD_EBUDGET     /* a per-call evaluation or work budget is spent (cd_step, cd_sim_advance) */
 } cd_status;
 
 /* A caller-owned error report. Functions that can fail fill it (if non-NULL)
@@ -61,12 +62,26 @@ typedef enum {
     CD_SHAPE_CONVEX,       /* convex hull of vertices (shape frame), through libccd */
     CD_SHAPE_NTYPES
 } cd_shape_type;
+/* Actuator laws. Each actuator's command is u = law + ctrl[a] (d->ctrl, written
+ * by the caller between calls or by a control callback); the motor model, if
+ * any, limits u to the torque-speed envelope; the transmission applies
+ * ratio_j * u to each of its joints. For PD, q and qdot are the transmission
+ * coordinate sum_j ratio_j q_j and its rate. */
 typedef enum {
-    CD_ACT_NONE = 0,       /* passive joint (zero torque) */
-    CD_ACT_CONSTANT,       /* tau = tau0 */
-    CD_ACT_TABLE,          /* tau(t) linear in a time table, held at the ends */
-    CD_ACT_PD              /* tau = tau0 + kp (qref - q) - kd qdot */
+    CD_ACT_NONE = 0,       /* law 0: u = ctrl only (a joint without actuator is passive) */
+    CD_ACT_CONSTANT,       /* law tau0 */
+    CD_ACT_TABLE,          /* law linear in a time table, held at the ends; breakpoints are located */
+    CD_ACT_PD,             /* law tau0 + kp (qref - q) - kd qdot */
+    CD_ACT_STEPS,          /* law piecewise constant: v_i on [t_i, t_i+1), v_0 before t_0;
+                              every step is an exact time event */
+    CD_ACT_NTYPES
 } cd_act_type;
+typedef enum {
+    CD_PRESCRIBE_NONE = 0,
+    CD_PRESCRIBE_VELOCITY, /* q = q0 + v (t - t_start) for t >= t_start (q0 before) */
+    CD_PRESCRIBE_WAYPOINTS /* q through (t_i, q_i) with minimum-jerk quintic segments
+                              (zero velocity and acceleration at every waypoint), held at the ends */
+} cd_prescribe_type;
 typedef enum {
     CD_STEP_RKF45 = 0, CD_STEP_RKCK, CD_STEP_RK8PD, CD_STEP_RK4IMP, CD_STEP_MSBDF,
     CD_STEP_RK4_FIXED,     /* classic RK4 with fixed step h_fixed (embedding mode) */
@@ -94,7 +109,17 @@ typedef struct {
     double dwell;         /* min time between two switches of one slot [s], default 1e-7 */
     double v_reg;         /* slip-direction regularisation speed [m/s], default 1e-6 */
     double fd_eps;        /* relative finite-difference step of implicit steppers' Jacobian, default 1e-7 */
+    long max_evals;       /* rhs-evaluation budget per cd_step / cd_sim_advance call (0 = none, default);
+                             cd_step lands a located event early rather than exceed it (hard real time) */
+    int equilibrium_start;/* 1: at reset, contacts closed at t = 0 (and engaged joint stops) start in
+                             static equilibrium (normal penetration and stick anchors preloaded by a
+                             quasi-static settle); 0 (default): they start with zero tangential deflection */
 } cd_options;
+/* Which options may change after cd_data_create: every one except `stepper`
+ * (the GSL objects are made for it) and `equilibrium_start` / `h_init` (used
+ * at reset). cd_data keeps its own copy (d->opt), taken from the model's at
+ * creation; edit d->opt between calls. Changing tolerances takes effect at
+ * the next call. */
 
 /* The defaults listed above. */
 cd_options cd_options_default(void);
@@ -110,11 +135,16 @@ cd_status cd_options_check(const cd_options *o, cd_error *err);
  * reverses. See docs/contact.md. */
 typedef struct {
     double K, D, p, q;    /* [N/m^p], [N (s/m)^q], exponents (>= 1) */
-    double Kt, Dt;        /* [N/m], [N s/m] tangential stick spring-damper */
+    double Kt, Dt;        /* [N/m^pt], [N (s/m)^qt] tangential stick spring-damper */
     double mu_s, mu_k;    /* static (maximum) and kinetic friction coefficients */
+    double pt, qt;        /* tangential exponents of eq. (4): f_t = -(K_t |z|^pt z/|z| + D_t |v|^qt v/|v|);
+                             pt >= 1, qt > 0, default 1 (linear) */
+    int pull;             /* 0 (default): no pull, f_n >= 0, separation where min(K x, f_raw) reaches 0;
+                             1: plain Kelvin-Voigt, contact kept until x returns to 0, f_n may pull */
 } cd_contact_law;
 
-/* Linear law K = 1e5 N/m, D = 100 N s/m, p = q = 1, K_t = K, D_t = D, mu = 0.5. */
+/* Linear law K = 1e5 N/m, D = 100 N s/m, p = q = 1, K_t = K, D_t = D, mu = 0.5,
+ * pt = qt = 1, no pull. */
 cd_contact_law cd_contact_law_default(void);
 
 /* The paper's rule (sec. 2): the contact is k_ratio (10..100) times stiffer than
@@ -134,6 +164,44 @@ typedef struct {
     const double *tbl_v;  /* table values [N m] (copied) */
     int ntbl;
 } cd_actuator;
+
+/* A general actuator: a law (as cd_actuator), a transmission to one or more
+ * joints with ratios (one motor driving every joint of a finger), an optional
+ * DC-motor torque-speed envelope. */
+typedef struct {
+    const char *name;     /* copied; may be NULL */
+    cd_act_type type;
+    double tau0, kp, kd, qref;
+    const double *tbl_t, *tbl_v;  /* TABLE / STEPS rows (copied) */
+    int ntbl;
+    int ntrn;             /* joints driven (>= 1) */
+    const int *trn_body;  /* (ntrn) joint bodies (copied) */
+    const double *trn_ratio; /* (ntrn) joint torque = ratio x actuator torque (copied) */
+    double stall_torque;  /* [N m] > 0 enables the motor model: |u| limited to the line through
+                             (0, stall_torque) and (noload_speed, 0) in the direction of motion */
+    double noload_speed;  /* [rad/s] of the transmission coordinate, > 0 with stall_torque */
+} cd_actuator_desc;
+cd_actuator_desc cd_actuator_desc_default(void);
+
+/* Passive joint elements, limits and prescribed motion of one joint. */
+typedef struct {
+    double stiffness;     /* passive spring [N m/rad | N/m], >= 0 */
+    double rest;          /* its rest position [rad | m] */
+    double damping;       /* viscous damper [N m s/rad | N s/m], >= 0 */
+    double friction;      /* Coulomb friction torque [N m | N], >= 0 (0 = none): stick-slip with
+                             a located switch, like the contact's tangential law */
+    double friction_k;    /* stick stiffness [N m/rad]; 0 = friction / 1e-4 rad (breakaway at 0.1 mrad) */
+    double friction_d;    /* stick damping [N m s/rad]; 0 = critical for the joint's subtree inertia */
+    int limited;          /* 1: compliant stops at lower and upper */
+    double lower, upper;  /* [rad | m], lower < upper */
+    double stop_K, stop_D, stop_p, stop_q; /* stop law K d^p + D ddot^q (d beyond the limit),
+                             no pull; 0 = K 1e3 N m/rad, D critical for the subtree inertia, p = q = 1 */
+    cd_prescribe_type prescribe;
+    double presc_v, presc_t0;           /* VELOCITY: rate, start time */
+    const double *presc_t, *presc_q;    /* WAYPOINTS (copied) */
+    int npresc;
+} cd_joint_props;
+cd_joint_props cd_joint_props_default(void);
 
 /* ---- descriptions used by the builder -------------------------------------- */
 typedef struct {
@@ -170,9 +238,17 @@ cd_link_desc cd_link_desc_default(void);
  * contiguous, the base first, every parent before its children. */
 typedef struct cd_model {
     int nsys, nbody, ncp, nshape, nvert, nlaw, npair, nslot, ntbl;
+    int nu;               /* actuators */
+    int ntrn;             /* transmission entries, all actuators */
+    int nlim;             /* limited joints */
+    int nfric;            /* joints with Coulomb friction */
+    int nuser;            /* user switches (cd_model_set_user_switches) */
+    int npresc;           /* prescribed joints + prescribed bases */
+    int nsw;              /* switch units: nslot + nlim + nfric + nuser (see docs/events.md) */
     int nv;               /* generalized velocities, all systems */
     int ny;               /* continuous state size (see docs/dynamics.md) */
     int ny_slot_adr;      /* where the per-slot tangential deflections start in y (3 each, shape-body axes) */
+    int ny_fric_adr;      /* where the joint-friction stick deflections start in y (1 each) */
     int finalized;
     double gravity[3];    /* [m/s^2], world */
     cd_options opt;
@@ -204,11 +280,32 @@ typedef struct cd_model {
     double *body_inertia; /* (nbody x 9) about the CoM, body frame [kg m^2] */
     double *body_q0, *body_qd0;
 
-    /* actuators, one per joint body */
-    int *body_act_type;   /* cd_act_type */
-    double *body_act;     /* (nbody x 4) tau0, kp, kd, qref */
-    int *body_tbl_adr, *body_tbl_n;
+    /* joint elements (per body; 0 for bases) */
+    double *body_spring;  /* (nbody x 2) stiffness, rest */
+    double *body_damping; /* (nbody) */
+    double *body_fric;    /* (nbody x 3) Coulomb torque, stick stiffness, stick damping (resolved) */
+    double *body_limit;   /* (nbody x 6) lower, upper, K, D, p, q (resolved) */
+    int *body_lim_id;     /* (nbody) index among limited joints, -1 */
+    int *body_fric_id;    /* (nbody) index among friction joints, -1 */
+    int *lim_body;        /* (nlim) */
+    int *fric_body;       /* (nfric) */
+    int *body_presc;      /* (nbody) cd_prescribe_type of the joint (bases: of the base) */
+    double *body_presc_prm; /* (nbody x 6) joint: v, t0; base: v[3], w[3] (constant, world) */
+    int *body_wp_adr, *body_wp_n; /* waypoints in tbl_t / tbl_v */
+
+    /* actuators */
+    char **act_name;
+    int *act_type;        /* cd_act_type */
+    double *act_prm;      /* (nu x 4) tau0, kp, kd, qref */
+    double *act_motor;    /* (nu x 2) stall torque [N m], no-load speed [rad/s] (0 = no motor) */
+    int *act_tbl_adr, *act_tbl_n;
+    int *act_trn_adr, *act_trn_n;
+    int *trn_body;        /* (ntrn) */
+    double *trn_ratio;    /* (ntrn) */
+    int *body_act;        /* (nbody) actuator set by cd_model_set_actuator on this joint, -1 */
     double *tbl_t, *tbl_v;
+    int nbreak;           /* time events of the schedules (TABLE/STEPS rows, waypoints), sorted, unique */
+    double *breaks;       /* (nbreak) [s] */
 
     /* check points: a sphere of radius r centred at pos on a body */
     int *cp_body;
@@ -260,16 +357,34 @@ int cd_model_add_law(cd_model *m, const cd_contact_law *law, cd_error *err);
  * an error. If several pairs produce the same (check point, shape) slot, the
  * first pair's law is kept. */
 int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_error *err);
-/* Sets the actuator of a joint body (table arrays are copied). */
+/* Sets the actuator of a joint body (table arrays are copied): an actuator
+ * with a transmission of ratio 1 to that joint, replacing one set before. */
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err);
+/* Adds a general actuator (transmission, motor model); returns its id (index
+ * into d->ctrl) or -1 with err filled. */
+int cd_model_add_actuator(cd_model *m, const cd_actuator_desc *a, cd_error *err);
+/* Sets the passive elements, limits and prescribed motion of a joint body. */
+cd_status cd_model_set_joint(cd_model *m, int body, const cd_joint_props *p, cd_error *err);
+/* Prescribes the motion of a free base: constant linear velocity v (world,
+ * of the base CoM) and angular velocity w (world) from t = 0, exactly (the
+ * base then moves like a test rig; the wrench it takes is in d->qfrc_constraint). */
+cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const double w[3], cd_error *err);
+/* Reserves n user switches (cd_data_set_user_switches gives their functions). */
+cd_status cd_model_set_user_switches(cd_model *m, int n, cd_error *err);
+/* Actuator id by name; -1 if none. */
+int cd_model_actuator_id(const cd_model *m, const char *name);
 
 /* Body id from "system/body" or a body name unique in the model; -1 if none. */
 int cd_model_body_id(const cd_model *m, const char *name);
 int cd_model_system_id(const cd_model *m, const char *name);
 
-/* Validates (positive masses, positive definite inertias obeying the triangle
- * inequality, finite numbers, orthonormal rotations), lays out the state and
- * builds the slot table. Returns CD_OK or CD_EINVAL with err naming the body. */
+/* Validates what the builder calls could not check alone (at least one
+ * degree of freedom or contact slot; option ranges; convex hulls with volume;
+ * joint limits containing q0), lays out the state, builds the slot table, the
+ * switch units and the schedule's time events. Each builder call has already
+ * checked its own description (positive masses, positive definite inertias
+ * obeying the triangle inequality, finite numbers, proper rotations).
+ * Returns CD_OK or CD_EINVAL with err naming the body. */
 cd_status cd_model_finalize(cd_model *m, cd_error *err);
 
 #ifdef __cplusplus

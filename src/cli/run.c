@@ -94,7 +94,7 @@ static void clear_progress(run_ctx *c)
     }
 }
 
-static int step_cb(const cd_model *m, const cd_data *d, void *user)
+static int step_cb(const cd_model *m, cd_data *d, void *user)
 {
     run_ctx *c = (run_ctx *)user;
     int k;

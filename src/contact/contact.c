@@ -90,6 +90,15 @@ static void tangential(double r[3], const double a[3], const double n[3])
     cd_v3_axpy(r, -an, n);
 }
 
+/* r = K |a|^p a/|a| (a vector law with a signed power; p = 1: K a) */
+static void vpow(double r[3], const double a[3], double K, double p)
+{
+    double n;
+    if (p == 1.0) { cd_v3_scale(r, a, K); return; }
+    n = cd_v3_norm(a);
+    cd_v3_scale(r, a, n > 0 ? K * pow(n, p - 1.0) : 0.0);
+}
+
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
     int k;
@@ -136,25 +145,32 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         /* eq. (3) */
         fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
         if (mode != CD_MODE_OPEN) {
-            fn = fraw; /* >= 0 between events: separation is located where it reaches 0 */
+            fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
+                          with `pull` it may be negative until x returns to 0 */
             if (mode == CD_MODE_STICK) {
                 double zw[3], zt[3];
+                double fk[3], fd[3];
                 cd_m3_mulv(zw, d->body_R + 9 * bb, z);
                 tangential(zt, zw, n);
-                /* eq. (4), linear: f_t = -(K_t z_t + D_t v_t) */
-                cd_v3_scale(ft, zt, -L->Kt);
-                cd_v3_axpy(ft, -L->Dt, vt);
+                /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), signed vector powers */
+                vpow(fk, zt, L->Kt, L->pt);
+                vpow(fd, vt, L->Dt, L->qt);
+                cd_v3_add(ft, fk, fd);
+                cd_v3_scale(ft, ft, -1.0);
                 cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
             } else {
                 double st[3], u[3], nu;
                 tangential(st, d->slot_dir + 3 * k, n);
                 cd_v3_normalize(st);
                 double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
-                double *va = d->slot_va + 3 * k;
+                double *va = d->slot_va + 3 * k, zrate;
+                /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
+                if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
+                else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
                 cd_v3_copy(va, vt);
-                cd_v3_axpy(va, -L->mu_k * fdot / L->Kt, st);
+                cd_v3_axpy(va, -zrate, st);
                 cd_v3_copy(u, va);
-                cd_v3_axpy(u, 2.0 * m->opt.v_reg, st);
+                cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
                 nu = cd_v3_norm(u);
                 /* eq. (5): Coulomb, against the slip */
                 if (nu > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
@@ -164,8 +180,9 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
             /* switches suspended by the chattering guard (at most `dwell`):
              * keep the no-pull rule and the friction cone by clipping */
             double nft;
-            if (fn < 0) fn = 0;
+            if (fn < 0 && !L->pull) fn = 0;
             nft = cd_v3_norm(ft);
+            if (fn < 0) { cd_v3_zero(ft); nft = 0; }
             if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
         }
         d->slot_x[k] = x;
@@ -191,31 +208,102 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 
 /* Switching functions of slot k after cd_contact_eval, signed so that a
  * NEGATIVE value means "the slot must leave its mode":
- *   open:  -min(x, f_raw)            onset when both penetration and f_raw > 0
- *   stick: min(x, f_raw)             separation
+ *   open:  -min(K x, f_raw)          onset when both penetration and f_raw > 0
+ *          (pull: -K x, onset at x = 0)
+ *   stick: min(K x, f_raw)           separation (pull: K x)
  *          mu_s f_n - |f_t|          stick -> slip
- *   slip:  min(x, f_raw)             separation
- *          v_a . s_t + v_reg         slip -> stick (slip velocity reversed)  */
-void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_norm, double *g_fric)
+ *   slip:  min(K x, f_raw)           separation
+ *          v_a . s_t + v_reg         slip -> stick (slip velocity reversed)
+ * With forgive, zero-time re-checks pardon round-off in the friction
+ * functions (e.g. slip -> stick with mu_s = mu_k lands exactly on the cone
+ * and must not flip straight back). */
+void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, double g[2])
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double x = d->slot_x[k], f = d->slot_fnraw[k];
     int mode = d->slot_mode[k];
     /* min(K x, f_raw): the penetration scaled to a force so that min() compares like with like */
-    double gn = (x * L->K) < f ? x * L->K : f;
-    *g_fric = 1.0;
+    double gn = L->pull ? x * L->K : ((x * L->K) < f ? x * L->K : f);
+    g[1] = 1.0;
     if (mode == CD_MODE_OPEN) {
-        *g_norm = -gn;
+        g[0] = -gn;
         return;
     }
-    *g_norm = gn;
+    g[0] = gn;
     if (mode == CD_MODE_STICK) {
-        *g_fric = L->mu_s * d->slot_fn[k] - cd_v3_norm(d->slot_ft + 3 * k);
+        g[1] = L->mu_s * d->slot_fn[k] - cd_v3_norm(d->slot_ft + 3 * k);
+        if (forgive && g[1] >= -1e-9 * L->mu_s * d->slot_fn[k]) g[1] = 0;
     } else {
         const double *n = d->slot_normal + 3 * k;
         double st[3];
         tangential(st, d->slot_dir + 3 * k, n);
         cd_v3_normalize(st);
-        *g_fric = cd_v3_dot(d->slot_va + 3 * k, st) + m->opt.v_reg;
+        g[1] = cd_v3_dot(d->slot_va + 3 * k, st) + d->opt.v_reg;
+        if (forgive && g[1] >= -1e-3 * d->opt.v_reg) g[1] = 0;
     }
+}
+
+static void any_tangent(double t[3], const double n[3])
+{
+    double a[3] = {1, 0, 0};
+    if (fabs(n[0]) > 0.9) cd_v3_set(a, 0, 1, 0);
+    cd_v3_cross(t, n, a);
+    cd_v3_normalize(t);
+}
+
+int cd_contact_transition(const cd_model *m, cd_data *d, int k, int forgive, cd_event *ev)
+{
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double g[2], *z = d->y + m->ny_slot_adr + 3 * k;
+    const double *n = d->slot_normal + 3 * k, *ft = d->slot_ft + 3 * k, *vt = d->slot_vt + 3 * k;
+    int from = d->slot_mode[k], to = from, kind = -1;
+    cd_contact_switch(m, d, k, forgive, g);
+    if (g[0] < 0) {
+        if (from == CD_MODE_OPEN) { to = CD_MODE_STICK; kind = CD_EV_ONSET; }
+        else { to = CD_MODE_OPEN; kind = CD_EV_SEPARATION; }
+        cd_v3_zero(z);
+    } else if (g[1] < 0 && from == CD_MODE_STICK) {
+        double nf = cd_v3_norm(ft), *s = d->slot_dir + 3 * k;
+        to = CD_MODE_SLIP;
+        kind = CD_EV_STICK_SLIP;
+        /* the slip goes where the stick spring is pulled: against f_t */
+        if (nf > 0) cd_v3_scale(s, ft, -1.0 / nf);
+        else if (cd_v3_norm(vt) > 0) { cd_v3_copy(s, vt); cd_v3_normalize(s); }
+        else any_tangent(s, n);
+    } else if (g[1] < 0 && from == CD_MODE_SLIP) {
+        const double *vs = d->slot_va + 3 * k;
+        double nv = cd_v3_norm(vs);
+        if (nv > 100.0 * d->opt.v_reg) {
+            /* 3-D slip that turned past 90 deg at speed: re-anchor, keep slipping */
+            kind = CD_EV_SLIP_TURN;
+            cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);
+        } else {
+            double zw[3], w[3], fd[3], nw;
+            to = CD_MODE_STICK;
+            kind = CD_EV_SLIP_STICK;
+            /* anchor so that f_t is continuous: K_t z^pt = -f_t - D_t v_t^qt, stored
+             * in the axes of the shape's body (see the header) */
+            vpow(fd, vt, L->Dt, L->qt);
+            cd_v3_add(w, ft, fd);
+            cd_v3_scale(w, w, -1.0);
+            nw = cd_v3_norm(w);
+            if (L->pt == 1.0) cd_v3_scale(zw, w, 1.0 / L->Kt);
+            else cd_v3_scale(zw, w, nw > 0 ? pow(nw / L->Kt, 1.0 / L->pt) / nw : 0.0);
+            cd_m3_tmulv(z, d->body_R + 9 * m->shape_body[m->slot_shape[k]], zw);
+        }
+    }
+    if (kind < 0) return 0;
+    ev->kind = kind;
+    ev->owner_kind = CD_OWNER_SLOT;
+    ev->owner = k;
+    ev->slot = k;
+    ev->body_a = m->cp_body[m->slot_cp[k]];
+    ev->body_b = m->shape_body[m->slot_shape[k]];
+    ev->mode_from = from;
+    ev->mode_to = to;
+    ev->x = d->slot_x[k];
+    ev->fn = d->slot_fn[k];
+    ev->ft = cd_v3_norm(d->slot_ft + 3 * k);
+    d->slot_mode[k] = to;
+    return 1;
 }

@@ -8,7 +8,12 @@
  * (3 per slot). */
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot);
 
-/* Switching functions of slot k (negative = leave the mode); see contact.c. */
-void cd_contact_switch(const cd_model *m, const cd_data *d, int k, double *g_norm, double *g_fric);
+/* Switching functions of slot k (g[0] normal, g[1] friction; negative =
+ * leave the mode); see contact.c. */
+void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, double g[2]);
+/* Applies the transition slot k's functions call for at the current state
+ * (after an evaluation); fills ev's kind, owner, modes and forces. Returns 1
+ * if the mode changed (or the slip direction was re-anchored). */
+int cd_contact_transition(const cd_model *m, cd_data *d, int k, int forgive, cd_event *ev);
 
 #endif

@@ -12,127 +12,9 @@
  * moment arms small and needs no coordinate transforms between bodies. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "../kinematics/prescribed.h"
 
 #include <string.h>
-
-/* offsets of a system's parts inside y */
-static void sys_layout(const cd_model *m, int s, int *pos, int *q, int *vel, int *qd)
-{
-    int a = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1;
-    if (m->sys_base_type[s] == CD_BASE_FREE) {
-        *pos = a; *q = a + 7; *vel = a + 7 + nj; *qd = a + 7 + nj + 6;
-    } else {
-        *pos = -1; *q = a; *vel = -1; *qd = a + nj;
-    }
-}
-
-cd_sys_state cd_state_of(const cd_model *m, const cd_data *d, int s)
-{
-    cd_sys_state r;
-    int pos, q, vel, qd;
-    sys_layout(m, s, &pos, &q, &vel, &qd);
-    r.njoint = m->sys_nbody[s] - 1;
-    r.pos = pos >= 0 ? d->y + pos : NULL;
-    r.quat = pos >= 0 ? d->y + pos + 3 : NULL;
-    r.vel = vel >= 0 ? d->y + vel : NULL;
-    r.angvel = vel >= 0 ? d->y + vel + 3 : NULL;
-    r.q = d->y + q;
-    r.qd = d->y + qd;
-    return r;
-}
-
-double cd_joint_q(const cd_model *m, const cd_data *d, int b)
-{
-    int s = m->body_sys[b];
-    if (m->body_parent[b] < 0) return 0.0;
-    return cd_state_of(m, d, s).q[b - m->sys_body_adr[s] - 1];
-}
-
-double cd_joint_qd(const cd_model *m, const cd_data *d, int b)
-{
-    int s = m->body_sys[b];
-    if (m->body_parent[b] < 0) return 0.0;
-    return cd_state_of(m, d, s).qd[b - m->sys_body_adr[s] - 1];
-}
-
-void cd_kinematics(const cd_model *m, cd_data *d)
-{
-    int s, b;
-    for (s = 0; s < m->nsys; s++) {
-        cd_sys_state st = cd_state_of(m, d, s);
-        int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s];
-        double *P = d->sys_ref + 3 * s, *V;
-        /* base */
-        if (st.pos) {
-            cd_v3_copy(P, st.pos);
-            cd_quat_to_m3(d->body_R + 9 * b0, st.quat);
-            cd_v3_copy(d->body_w + 3 * b0, st.angvel);
-            cd_v3_copy(d->body_v + 3 * b0, st.vel);
-        } else {
-            cd_v3_copy(P, m->sys_pos0 + 3 * s);
-            cd_quat_to_m3(d->body_R + 9 * b0, m->sys_quat0 + 4 * s);
-            cd_v3_zero(d->body_w + 3 * b0);
-            cd_v3_zero(d->body_v + 3 * b0);
-        }
-        cd_v3_copy(d->body_x + 3 * b0, P);
-        cd_v3_copy(d->body_c + 3 * b0, P);
-        cd_v3_zero(d->body_axisw + 3 * b0);
-        memset(d->body_S + 6 * b0, 0, 6 * sizeof(double));
-        V = d->body_V + 6 * b0;
-        cd_v3_copy(V, d->body_w + 3 * b0);
-        cd_v3_copy(V + 3, d->body_v + 3 * b0);
-        /* links, parents first */
-        for (b = b0 + 1; b < b0 + nb; b++) {
-            int p = m->body_parent[b];
-            double q = st.q[b - b0 - 1], qd = st.qd[b - b0 - 1];
-            double Rfix[9], Rq[9], t[3], r[3];
-            double *R = d->body_R + 9 * b, *x = d->body_x + 3 * b, *z = d->body_axisw + 3 * b;
-            double *S = d->body_S + 6 * b, *Vb = d->body_V + 6 * b, *Vp = d->body_V + 6 * p;
-            int i;
-            cd_m3_mulv(t, d->body_R + 9 * p, m->body_jnt_pos + 3 * b);
-            cd_v3_add(x, d->body_x + 3 * p, t);
-            cd_m3_mul(Rfix, d->body_R + 9 * p, m->body_jnt_rot + 9 * b);
-            cd_m3_mulv(z, Rfix, m->body_axis + 3 * b);
-            if (m->body_jnt_type[b] == CD_JOINT_REVOLUTE) {
-                cd_m3_axis_angle(Rq, m->body_axis + 3 * b, q);
-                cd_m3_mul(R, Rfix, Rq);
-                /* S = [z; (x - P) x z] */
-                cd_v3_copy(S, z);
-                cd_v3_sub(r, x, P);
-                cd_v3_cross(S + 3, r, z);
-            } else {
-                cd_m3_copy(R, Rfix);
-                cd_v3_axpy(x, q, z);
-                cd_v3_zero(S);
-                cd_v3_copy(S + 3, z);
-            }
-            for (i = 0; i < 6; i++) Vb[i] = Vp[i] + S[i] * qd;
-            cd_m3_mulv(t, R, m->body_com + 3 * b);
-            cd_v3_add(d->body_c + 3 * b, x, t);
-            cd_v3_copy(d->body_w + 3 * b, Vb);
-            /* CoM velocity: v_P + w x (c - P) */
-            cd_v3_sub(r, d->body_c + 3 * b, P);
-            cd_v3_cross(t, Vb, r);
-            cd_v3_add(d->body_v + 3 * b, Vb + 3, t);
-        }
-    }
-}
-
-void cd_point_world(const cd_model *m, const cd_data *d, int b, const double pb[3],
-                    double pw[3], double vw[3])
-{
-    double t[3], p[3];
-    (void)m;
-    cd_m3_mulv(t, d->body_R + 9 * b, pb);
-    cd_v3_add(p, d->body_x + 3 * b, t);
-    if (vw) {
-        /* v = v_c + w x (p - c) */
-        cd_v3_sub(t, p, d->body_c + 3 * b);
-        cd_v3_cross(vw, d->body_w + 3 * b, t);
-        cd_v3_add(vw, vw, d->body_v + 3 * b);
-    }
-    if (pw) cd_v3_copy(pw, p);
-}
 
 /* spatial inertia of every body of system s about its reference point */
 static void body_inertias(const cd_model *m, cd_data *d, int s)
@@ -230,20 +112,70 @@ void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
     }
 }
 
+/* prescribed accelerations of system s into a (ndof); returns how many DoFs are prescribed */
+static int prescribed_acc(const cd_model *m, const cd_data *d, int s, double *a, int *is_p)
+{
+    int b0 = m->sys_body_adr[s], j0 = m->sys_base_type[s] == CD_BASE_FREE ? 6 : 0, b, i, np = 0;
+    for (i = 0; i < m->sys_ndof[s]; i++) { a[i] = 0; is_p[i] = 0; }
+    if (j0 && m->body_presc[b0] != CD_PRESCRIBE_NONE) /* constant base velocities: zero acceleration */
+        for (i = 0; i < 6; i++) { is_p[i] = 1; np++; }
+    for (b = b0 + 1; b < b0 + m->sys_nbody[s]; b++)
+        if (m->body_presc[b] != CD_PRESCRIBE_NONE) {
+            double q, qd;
+            int k = j0 + b - b0 - 1;
+            cd_prescribed_joint(m, b, d->t, &q, &qd, &a[k]);
+            is_p[k] = 1;
+            np++;
+        }
+    return np;
+}
+
 cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
 {
-    int s, i;
+    int s, i, j;
     for (s = 0; s < m->nsys; s++) {
-        int n = m->sys_ndof[s], va = m->sys_v_adr[s];
-        double *rhs = d->work + 12 * m->nbody, *zero = rhs + n;
+        int n = m->sys_ndof[s], va = m->sys_v_adr[s], np = 0, nf;
+        double *rhs = d->work + 12 * m->nbody, *zero = rhs + n, *acc = zero + n, *idf = acc + n;
+        int *is_p = (int *)(void *)(d->jwork); /* (n) flags, jwork is 12 maxdof + 36 doubles */
         if (n == 0) continue;
         for (i = 0; i < n; i++) zero[i] = 0.0;
         cd_inverse_dynamics(m, d, s, zero, rhs); /* rhs = h - J^T F (bias) */
         for (i = 0; i < n; i++) rhs[i] = d->tau[va + i] - rhs[i];
         cd_mass_matrix(m, d, s, d->H);
-        if (cd_chol_decomp(d->H, n) != 0) return CD_ENUMERIC;
-        cd_chol_solve(d->H, n, rhs);
-        for (i = 0; i < n; i++) d->udot[va + i] = rhs[i];
+        if (m->npresc) np = prescribed_acc(m, d, s, acc, is_p);
+        if (np == 0) {
+            if (cd_chol_decomp(d->H, n) != 0) return CD_ENUMERIC;
+            cd_chol_solve(d->H, n, rhs);
+            for (i = 0; i < n; i++) d->udot[va + i] = rhs[i];
+            continue;
+        }
+        /* partitioned: H_FF a_F = rhs_F - H_FP a_P, then the generalized force the
+         * prescribed DoFs take is ID(a)_P - tau_P (one more RNE pass) */
+        nf = 0;
+        for (i = 0; i < n; i++) {
+            double r = rhs[i];
+            if (is_p[i]) continue;
+            for (j = 0; j < n; j++)
+                if (is_p[j]) r -= d->H[i * n + j] * acc[j];
+            zero[nf++] = r;
+        }
+        if (nf > 0) {
+            int ii = 0, jj;
+            for (i = 0; i < n; i++) {
+                if (is_p[i]) continue;
+                jj = 0;
+                for (j = 0; j < n; j++)
+                    if (!is_p[j]) d->H[ii * nf + jj++] = d->H[i * n + j]; /* compaction in place: never overtakes */
+                ii++;
+            }
+            if (cd_chol_decomp(d->H, nf) != 0) return CD_ENUMERIC;
+            cd_chol_solve(d->H, nf, zero);
+            for (i = 0, ii = 0; i < n; i++)
+                if (!is_p[i]) acc[i] = zero[ii++];
+        }
+        for (i = 0; i < n; i++) d->udot[va + i] = acc[i];
+        cd_inverse_dynamics(m, d, s, acc, idf);
+        for (i = 0; i < n; i++) d->qfrc_constraint[va + i] = is_p[i] ? idf[i] - d->tau[va + i] : 0.0;
     }
     return CD_OK;
 }

@@ -30,6 +30,7 @@ const char *cd_status_string(cd_status s)
     case CD_EMAXSTEPS: return "step budget exhausted";
     case CD_EIO: return "input/output error";
     case CD_EINTERRUPT: return "interrupted";
+    case CD_EBUDGET: return "evaluation budget spent";
     }
     return "unknown status";
 }
@@ -75,6 +76,8 @@ cd_options cd_options_default(void)
     o.dwell = 1e-7;
     o.v_reg = 1e-6;
     o.fd_eps = 1e-7;
+    o.max_evals = 0;
+    o.equilibrium_start = 0;
     return o;
 }
 
@@ -88,7 +91,7 @@ cd_status cd_options_check(const cd_options *o, cd_error *err)
     }
     if (!(o->h_init > 0 && isfinite(o->h_init)) || !(o->h_max >= 0) || !(o->h_min >= 0) ||
         !(o->h_fixed > 0 && isfinite(o->h_fixed)) || o->max_steps < 1 || !(o->event_tol > 0) || !(o->dwell >= 0) ||
-        !(o->v_reg > 0) || !(o->fd_eps > 0)) {
+        !(o->v_reg > 0) || !(o->fd_eps > 0) || o->max_evals < 0 || (o->equilibrium_start != 0 && o->equilibrium_start != 1)) {
         seterr(err, CD_EINVAL, "integrator options out of range (steps, tolerances and budgets must be positive)");
         return CD_EINVAL;
     }
@@ -101,6 +104,8 @@ cd_contact_law cd_contact_law_default(void)
     l.K = 1e5; l.D = 100.0; l.p = 1.0; l.q = 1.0;
     l.Kt = 1e5; l.Dt = 100.0;
     l.mu_s = 0.5; l.mu_k = 0.5;
+    l.pt = 1.0; l.qt = 1.0;
+    l.pull = 0;
     return l;
 }
 
@@ -182,8 +187,13 @@ void cd_model_free(cd_model *m)
     free(m->body_name); free(m->body_sys); free(m->body_parent); free(m->body_jnt_type);
     free(m->body_dof); free(m->body_jnt_pos); free(m->body_jnt_rot); free(m->body_axis);
     free(m->body_mass); free(m->body_com); free(m->body_inertia); free(m->body_q0);
-    free(m->body_qd0); free(m->body_act_type); free(m->body_act); free(m->body_tbl_adr);
-    free(m->body_tbl_n); free(m->tbl_t); free(m->tbl_v);
+    free(m->body_qd0); free(m->body_spring); free(m->body_damping); free(m->body_fric); free(m->body_limit);
+    free(m->body_lim_id); free(m->body_fric_id); free(m->lim_body); free(m->fric_body); free(m->body_presc);
+    free(m->body_presc_prm); free(m->body_wp_adr); free(m->body_wp_n);
+    for (i = 0; i < m->nu; i++) free(m->act_name[i]);
+    free(m->act_name); free(m->act_type); free(m->act_prm); free(m->act_motor); free(m->act_tbl_adr);
+    free(m->act_tbl_n); free(m->act_trn_adr); free(m->act_trn_n); free(m->trn_body); free(m->trn_ratio);
+    free(m->body_act); free(m->tbl_t); free(m->tbl_v); free(m->breaks);
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert);
@@ -272,8 +282,10 @@ static int add_body_arrays(cd_model *m)
     ok |= RS(m->body_jnt_type, n); ok |= RS(m->body_dof, n); ok |= RS(m->body_jnt_pos, 3 * n);
     ok |= RS(m->body_jnt_rot, 9 * n); ok |= RS(m->body_axis, 3 * n); ok |= RS(m->body_mass, n);
     ok |= RS(m->body_com, 3 * n); ok |= RS(m->body_inertia, 9 * n); ok |= RS(m->body_q0, n);
-    ok |= RS(m->body_qd0, n); ok |= RS(m->body_act_type, n); ok |= RS(m->body_act, 4 * n);
-    ok |= RS(m->body_tbl_adr, n); ok |= RS(m->body_tbl_n, n);
+    ok |= RS(m->body_qd0, n); ok |= RS(m->body_spring, 2 * n); ok |= RS(m->body_damping, n);
+    ok |= RS(m->body_fric, 3 * n); ok |= RS(m->body_limit, 6 * n); ok |= RS(m->body_lim_id, n);
+    ok |= RS(m->body_fric_id, n); ok |= RS(m->body_presc, n); ok |= RS(m->body_presc_prm, 6 * n);
+    ok |= RS(m->body_wp_adr, n); ok |= RS(m->body_wp_n, n); ok |= RS(m->body_act, n);
     return ok ? -1 : 0;
 }
 
@@ -297,10 +309,15 @@ static int new_body(cd_model *m, const char *name, int sys, int parent, int jtyp
     cd_m3_copy(m->body_inertia + 9 * b, inertia);
     m->body_q0[b] = q0;
     m->body_qd0[b] = qd0;
-    m->body_act_type[b] = CD_ACT_NONE;
-    memset(m->body_act + 4 * b, 0, 4 * sizeof(double));
-    m->body_tbl_adr[b] = 0;
-    m->body_tbl_n[b] = 0;
+    memset(m->body_spring + 2 * b, 0, 2 * sizeof(double));
+    m->body_damping[b] = 0;
+    memset(m->body_fric + 3 * b, 0, 3 * sizeof(double));
+    memset(m->body_limit + 6 * b, 0, 6 * sizeof(double));
+    m->body_lim_id[b] = m->body_fric_id[b] = -1;
+    m->body_presc[b] = CD_PRESCRIBE_NONE;
+    memset(m->body_presc_prm + 6 * b, 0, 6 * sizeof(double));
+    m->body_wp_adr[b] = m->body_wp_n[b] = 0;
+    m->body_act[b] = -1;
     m->nbody++;
     return b;
 }
@@ -514,6 +531,9 @@ int cd_model_add_law(cd_model *m, const cd_contact_law *l, cd_error *err)
     if (!(l->Kt > 0) || !isfinite(l->Kt)) { seterr(err, CD_EINVAL, "contact law: K_t must be > 0, got %g", l->Kt); return -1; }
     if (!(l->Dt >= 0) || !isfinite(l->Dt)) { seterr(err, CD_EINVAL, "contact law: D_t must be >= 0, got %g", l->Dt); return -1; }
     if (!(l->mu_s >= 0) || !isfinite(l->mu_s)) { seterr(err, CD_EINVAL, "contact law: mu_max must be >= 0, got %g", l->mu_s); return -1; }
+    if (!(l->pt >= 1) || !isfinite(l->pt)) { seterr(err, CD_EINVAL, "contact law: p_t must be >= 1, got %g", l->pt); return -1; }
+    if (!(l->qt > 0) || !isfinite(l->qt)) { seterr(err, CD_EINVAL, "contact law: q_t must be > 0, got %g", l->qt); return -1; }
+    if (l->pull != 0 && l->pull != 1) { seterr(err, CD_EINVAL, "contact law: pull must be 0 or 1, got %d", l->pull); return -1; }
     if (!(l->mu_k >= 0) || !(l->mu_k <= l->mu_s)) {
         seterr(err, CD_EINVAL, "contact law: mu must be in [0, mu_max=%g], got %g", l->mu_s, l->mu_k);
         return -1;
@@ -553,48 +573,373 @@ int cd_model_add_pair(cd_model *m, int sys, int body, int shape, int law, cd_err
     return id;
 }
 
-cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err)
+cd_actuator_desc cd_actuator_desc_default(void)
 {
-    int i, ok = 0;
-    FROZEN_CHECK(CD_EINVAL);
-    if (body < 0 || body >= m->nbody || m->body_parent[body] < 0) {
-        seterr(err, CD_EINVAL, "actuator: body %d is not a joint body", body);
-        return CD_EINVAL;
-    }
-    if (!a || a->type < CD_ACT_NONE || a->type > CD_ACT_PD) {
-        seterr(err, CD_EINVAL, "actuator on '%s': unknown type", m->body_name[body]);
+    cd_actuator_desc a;
+    memset(&a, 0, sizeof a);
+    a.type = CD_ACT_NONE;
+    return a;
+}
+
+cd_joint_props cd_joint_props_default(void)
+{
+    cd_joint_props p;
+    memset(&p, 0, sizeof p);
+    p.prescribe = CD_PRESCRIBE_NONE;
+    return p;
+}
+
+/* appends n (t, v) rows to the shared time tables; returns their address or -1 */
+static int add_rows(cd_model *m, const double *t, const double *v, int n)
+{
+    int at = m->ntbl;
+    if (RS(m->tbl_t, m->ntbl + n) || RS(m->tbl_v, m->ntbl + n)) return -1;
+    memcpy(m->tbl_t + at, t, (size_t)n * sizeof(double));
+    memcpy(m->tbl_v + at, v, (size_t)n * sizeof(double));
+    m->ntbl += n;
+    return at;
+}
+
+static int rows_ok(const double *t, const double *v, int n)
+{
+    int i;
+    for (i = 0; i < n; i++)
+        if (!isfinite(t[i]) || !isfinite(v[i]) || (i > 0 && !(t[i] > t[i - 1]))) return i;
+    return -1;
+}
+
+static int is_joint(const cd_model *m, int body) { return body >= 0 && body < m->nbody && m->body_parent[body] >= 0; }
+
+/* validates an actuator description; "what" names it in messages */
+static cd_status actuator_check(const cd_model *m, const cd_actuator_desc *a, const char *what, cd_error *err)
+{
+    int i, j, bad;
+    if (!a || a->type < CD_ACT_NONE || a->type >= CD_ACT_NTYPES) {
+        seterr(err, CD_EINVAL, "actuator %s: unknown type", what);
         return CD_EINVAL;
     }
     if (!isfinite(a->tau0) || !isfinite(a->kp) || !isfinite(a->kd) || !isfinite(a->qref)) {
-        seterr(err, CD_EINVAL, "actuator on '%s': non-finite parameter", m->body_name[body]);
+        seterr(err, CD_EINVAL, "actuator %s: non-finite parameter", what);
         return CD_EINVAL;
     }
-    m->body_act_type[body] = a->type;
-    m->body_act[4 * body] = a->tau0;
-    m->body_act[4 * body + 1] = a->kp;
-    m->body_act[4 * body + 2] = a->kd;
-    m->body_act[4 * body + 3] = a->qref;
-    if (a->type == CD_ACT_TABLE) {
+    if (a->type == CD_ACT_TABLE || a->type == CD_ACT_STEPS) {
         if (!a->tbl_t || !a->tbl_v || a->ntbl < 1) {
-            seterr(err, CD_EINVAL, "actuator on '%s': a table needs at least one (t, value) row", m->body_name[body]);
+            seterr(err, CD_EINVAL, "actuator %s: a table needs at least one (t, value) row", what);
             return CD_EINVAL;
         }
-        for (i = 0; i < a->ntbl; i++) {
-            if (!isfinite(a->tbl_t[i]) || !isfinite(a->tbl_v[i]) || (i > 0 && !(a->tbl_t[i] > a->tbl_t[i - 1]))) {
-                seterr(err, CD_EINVAL, "actuator on '%s': table row %d: times must be finite and strictly increasing",
-                       m->body_name[body], i);
+        if ((bad = rows_ok(a->tbl_t, a->tbl_v, a->ntbl)) >= 0) {
+            seterr(err, CD_EINVAL, "actuator %s: table row %d: times must be finite and strictly increasing", what, bad);
+            return CD_EINVAL;
+        }
+    }
+    if (a->ntrn < 1 || !a->trn_body || !a->trn_ratio) {
+        seterr(err, CD_EINVAL, "actuator %s: needs at least one joint in its transmission", what);
+        return CD_EINVAL;
+    }
+    for (i = 0; i < a->ntrn; i++) {
+        if (!is_joint(m, a->trn_body[i])) {
+            seterr(err, CD_EINVAL, "actuator %s: transmission entry %d: body %d is not a joint body", what, i, a->trn_body[i]);
+            return CD_EINVAL;
+        }
+        if (!isfinite(a->trn_ratio[i])) {
+            seterr(err, CD_EINVAL, "actuator %s: transmission ratio %d is not finite", what, i);
+            return CD_EINVAL;
+        }
+        for (j = 0; j < i; j++)
+            if (a->trn_body[j] == a->trn_body[i]) {
+                seterr(err, CD_EINVAL, "actuator %s: joint '%s' appears twice in the transmission", what,
+                       m->body_name[a->trn_body[i]]);
                 return CD_EINVAL;
             }
-        }
-        ok |= RS(m->tbl_t, m->ntbl + a->ntbl);
-        ok |= RS(m->tbl_v, m->ntbl + a->ntbl);
-        if (ok) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
-        memcpy(m->tbl_t + m->ntbl, a->tbl_t, (size_t)a->ntbl * sizeof(double));
-        memcpy(m->tbl_v + m->ntbl, a->tbl_v, (size_t)a->ntbl * sizeof(double));
-        m->body_tbl_adr[body] = m->ntbl;
-        m->body_tbl_n[body] = a->ntbl;
-        m->ntbl += a->ntbl;
     }
+    if (!(a->stall_torque >= 0) || !isfinite(a->stall_torque) || !(a->noload_speed >= 0) || !isfinite(a->noload_speed) ||
+        ((a->stall_torque > 0) != (a->noload_speed > 0))) {
+        seterr(err, CD_EINVAL, "actuator %s: motor model needs stall_torque > 0 and noload_speed > 0 together (got %g, %g)",
+               what, a->stall_torque, a->noload_speed);
+        return CD_EINVAL;
+    }
+    return CD_OK;
+}
+
+/* writes actuator id (id == nu appends) */
+static int actuator_store(cd_model *m, int id, const cd_actuator_desc *a, cd_error *err)
+{
+    int n = m->nu + 1, ok = 0, adr = 0;
+    if (id == m->nu) {
+        ok |= RS(m->act_name, n); ok |= RS(m->act_type, n); ok |= RS(m->act_prm, 4 * n);
+        ok |= RS(m->act_motor, 2 * n); ok |= RS(m->act_tbl_adr, n); ok |= RS(m->act_tbl_n, n);
+        ok |= RS(m->act_trn_adr, n); ok |= RS(m->act_trn_n, n);
+        if (ok) goto nomem;
+        m->act_name[id] = NULL;
+    }
+    if (a->type == CD_ACT_TABLE || a->type == CD_ACT_STEPS) {
+        adr = add_rows(m, a->tbl_t, a->tbl_v, a->ntbl);
+        if (adr < 0) goto nomem;
+    }
+    if (RS(m->trn_body, m->ntrn + a->ntrn) || RS(m->trn_ratio, m->ntrn + a->ntrn)) goto nomem;
+    free(m->act_name[id]);
+    m->act_name[id] = dupstr(a->name);
+    if (!m->act_name[id]) goto nomem;
+    /* (a replaced actuator's old rows stay unused in the tables: building is one-off) */
+    memcpy(m->trn_body + m->ntrn, a->trn_body, (size_t)a->ntrn * sizeof(int));
+    memcpy(m->trn_ratio + m->ntrn, a->trn_ratio, (size_t)a->ntrn * sizeof(double));
+    m->act_trn_adr[id] = m->ntrn;
+    m->act_trn_n[id] = a->ntrn;
+    m->ntrn += a->ntrn;
+    m->act_type[id] = a->type;
+    m->act_prm[4 * id] = a->tau0;
+    m->act_prm[4 * id + 1] = a->kp;
+    m->act_prm[4 * id + 2] = a->kd;
+    m->act_prm[4 * id + 3] = a->qref;
+    m->act_motor[2 * id] = a->stall_torque;
+    m->act_motor[2 * id + 1] = a->noload_speed;
+    m->act_tbl_adr[id] = adr;
+    m->act_tbl_n[id] = (a->type == CD_ACT_TABLE || a->type == CD_ACT_STEPS) ? a->ntbl : 0;
+    if (id == m->nu) m->nu++;
+    return id;
+nomem:
+    seterr(err, CD_ENOMEM, "out of memory");
+    return -1;
+}
+
+int cd_model_add_actuator(cd_model *m, const cd_actuator_desc *a, cd_error *err)
+{
+    FROZEN_CHECK(-1);
+    if (actuator_check(m, a, a && a->name ? a->name : "", err) != CD_OK) return -1;
+    return actuator_store(m, m->nu, a, err);
+}
+
+cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err)
+{
+    cd_actuator_desc d = cd_actuator_desc_default();
+    double one = 1.0;
+    char what[160];
+    int id;
+    FROZEN_CHECK(CD_EINVAL);
+    if (!is_joint(m, body)) {
+        seterr(err, CD_EINVAL, "actuator: body %d is not a joint body", body);
+        return CD_EINVAL;
+    }
+    if (!a) { seterr(err, CD_EINVAL, "actuator on '%s': unknown type (description is NULL)", m->body_name[body]); return CD_EINVAL; }
+    d.name = m->body_name[body];
+    d.type = a->type;
+    d.tau0 = a->tau0; d.kp = a->kp; d.kd = a->kd; d.qref = a->qref;
+    d.tbl_t = a->tbl_t; d.tbl_v = a->tbl_v; d.ntbl = a->ntbl;
+    d.ntrn = 1; d.trn_body = &body; d.trn_ratio = &one;
+    snprintf(what, sizeof what, "on '%s'", m->body_name[body]);
+    if (actuator_check(m, &d, what, err) != CD_OK) return CD_EINVAL;
+    id = actuator_store(m, m->body_act[body] >= 0 ? m->body_act[body] : m->nu, &d, err);
+    if (id < 0) return CD_ENOMEM;
+    m->body_act[body] = id;
+    return CD_OK;
+}
+
+cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_error *err)
+{
+    const char *nm;
+    int bad;
+    FROZEN_CHECK(CD_EINVAL);
+    if (!is_joint(m, b)) { seterr(err, CD_EINVAL, "joint properties: body %d is not a joint body", b); return CD_EINVAL; }
+    nm = m->body_name[b];
+    if (!p) { seterr(err, CD_EINVAL, "joint '%s': properties are NULL", nm); return CD_EINVAL; }
+    if (!(p->stiffness >= 0) || !isfinite(p->stiffness) || !isfinite(p->rest) || !(p->damping >= 0) ||
+        !isfinite(p->damping) || !(p->friction >= 0) || !isfinite(p->friction) || !(p->friction_k >= 0) ||
+        !isfinite(p->friction_k) || !(p->friction_d >= 0) || !isfinite(p->friction_d)) {
+        seterr(err, CD_EINVAL, "joint '%s': stiffness, damping and friction must be finite and >= 0", nm);
+        return CD_EINVAL;
+    }
+    if (p->limited) {
+        if (!isfinite(p->lower) || !isfinite(p->upper) || !(p->lower < p->upper)) {
+            seterr(err, CD_EINVAL, "joint '%s': limits must be finite with lower < upper (got %g, %g)", nm, p->lower, p->upper);
+            return CD_EINVAL;
+        }
+        if (!(p->stop_K >= 0) || !isfinite(p->stop_K) || !(p->stop_D >= 0) || !isfinite(p->stop_D) ||
+            !(p->stop_p == 0 || p->stop_p >= 1) || !isfinite(p->stop_p) || !(p->stop_q >= 0) || !isfinite(p->stop_q)) {
+            seterr(err, CD_EINVAL, "joint '%s': stop law needs K, D >= 0, p >= 1, q > 0 (0 = default)", nm);
+            return CD_EINVAL;
+        }
+    }
+    if (p->prescribe < CD_PRESCRIBE_NONE || p->prescribe > CD_PRESCRIBE_WAYPOINTS) {
+        seterr(err, CD_EINVAL, "joint '%s': unknown prescribed-motion type", nm);
+        return CD_EINVAL;
+    }
+    if (p->prescribe == CD_PRESCRIBE_VELOCITY && (!isfinite(p->presc_v) || !isfinite(p->presc_t0))) {
+        seterr(err, CD_EINVAL, "joint '%s': prescribed velocity and start time must be finite", nm);
+        return CD_EINVAL;
+    }
+    if (p->prescribe == CD_PRESCRIBE_WAYPOINTS) {
+        if (!p->presc_t || !p->presc_q || p->npresc < 1) {
+            seterr(err, CD_EINVAL, "joint '%s': prescribed waypoints need at least one (t, q) row", nm);
+            return CD_EINVAL;
+        }
+        if ((bad = rows_ok(p->presc_t, p->presc_q, p->npresc)) >= 0) {
+            seterr(err, CD_EINVAL, "joint '%s': waypoint %d: times must be finite and strictly increasing", nm, bad);
+            return CD_EINVAL;
+        }
+        m->body_wp_adr[b] = add_rows(m, p->presc_t, p->presc_q, p->npresc);
+        if (m->body_wp_adr[b] < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+        m->body_wp_n[b] = p->npresc;
+    }
+    m->body_spring[2 * b] = p->stiffness;
+    m->body_spring[2 * b + 1] = p->rest;
+    m->body_damping[b] = p->damping;
+    m->body_fric[3 * b] = p->friction;
+    m->body_fric[3 * b + 1] = p->friction_k;
+    m->body_fric[3 * b + 2] = p->friction_d;
+    m->body_lim_id[b] = p->limited ? 0 : -1; /* numbered at finalize */
+    m->body_limit[6 * b] = p->lower;
+    m->body_limit[6 * b + 1] = p->upper;
+    m->body_limit[6 * b + 2] = p->stop_K;
+    m->body_limit[6 * b + 3] = p->stop_D;
+    m->body_limit[6 * b + 4] = p->stop_p;
+    m->body_limit[6 * b + 5] = p->stop_q;
+    m->body_presc[b] = p->prescribe;
+    m->body_presc_prm[6 * b] = p->presc_v;
+    m->body_presc_prm[6 * b + 1] = p->presc_t0;
+    return CD_OK;
+}
+
+cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const double w[3], cd_error *err)
+{
+    int b;
+    FROZEN_CHECK(CD_EINVAL);
+    if (sys < 0 || sys >= m->nsys || m->sys_base_type[sys] != CD_BASE_FREE) {
+        seterr(err, CD_EINVAL, "prescribed base: system %d is not a free-floating system", sys);
+        return CD_EINVAL;
+    }
+    if (!v || !w || !finite_n(v, 3) || !finite_n(w, 3)) {
+        seterr(err, CD_EINVAL, "prescribed base of '%s': velocities must be finite", m->sys_name[sys]);
+        return CD_EINVAL;
+    }
+    b = m->sys_body_adr[sys];
+    m->body_presc[b] = CD_PRESCRIBE_VELOCITY;
+    cd_v3_copy(m->body_presc_prm + 6 * b, v);
+    cd_v3_copy(m->body_presc_prm + 6 * b + 3, w);
+    /* the initial velocities follow the prescription */
+    cd_v3_copy(m->sys_vel0 + 3 * sys, v);
+    cd_v3_copy(m->sys_angvel0 + 3 * sys, w);
+    return CD_OK;
+}
+
+cd_status cd_model_set_user_switches(cd_model *m, int n, cd_error *err)
+{
+    FROZEN_CHECK(CD_EINVAL);
+    if (n < 0 || n > 1000000) { seterr(err, CD_EINVAL, "user switches: count %d out of range [0, 1e6]", n); return CD_EINVAL; }
+    m->nuser = n;
+    return CD_OK;
+}
+
+int cd_model_actuator_id(const cd_model *m, const char *name)
+{
+    int i;
+    for (i = 0; m && name && i < m->nu; i++)
+        if (m->act_name[i] && strcmp(m->act_name[i], name) == 0) return i;
+    return -1;
+}
+
+/* Moment of inertia of the subtree rooted at joint body b about its joint
+ * axis at the initial configuration (the other joints at q0): the scale for
+ * the default damping of its stop and its friction's stick spring. */
+static double subtree_axis_inertia(const cd_model *m, int b)
+{
+    int s = m->body_sys[b], end = m->sys_body_adr[s] + m->sys_nbody[s], i, k;
+    double *R = NULL, *x = NULL, I = 0, ax[3];
+    R = malloc((size_t)(end - b) * 9 * sizeof(double));
+    x = malloc((size_t)(end - b) * 3 * sizeof(double));
+    if (!R || !x) { free(R); free(x); return 0; }
+    /* frames relative to b's joint frame at q = q0 */
+    cd_m3_identity(R);
+    cd_v3_zero(x);
+    cd_v3_copy(ax, m->body_axis + 3 * b);
+    for (i = b; i < end; i++) {
+        double Rq[9], Rf[9], t[3], c[3], r[3], Iw[9], Ia[3];
+        int in = (i == b), p = m->body_parent[i];
+        if (!in) {
+            for (k = p; k > b; k = m->body_parent[k]) {}
+            if (k != b) continue; /* not in the subtree */
+            cd_m3_mulv(t, R + 9 * (p - b), m->body_jnt_pos + 3 * i);
+            cd_v3_add(x + 3 * (i - b), x + 3 * (p - b), t);
+            cd_m3_mul(Rf, R + 9 * (p - b), m->body_jnt_rot + 9 * i);
+            if (m->body_jnt_type[i] == CD_JOINT_REVOLUTE) {
+                cd_m3_axis_angle(Rq, m->body_axis + 3 * i, m->body_q0[i]);
+                cd_m3_mul(R + 9 * (i - b), Rf, Rq);
+            } else {
+                cd_m3_copy(R + 9 * (i - b), Rf);
+                cd_m3_mulv(t, Rf, m->body_axis + 3 * i);
+                cd_v3_axpy(x + 3 * (i - b), m->body_q0[i], t);
+            }
+        }
+        cd_m3_mulv(t, R + 9 * (i - b), m->body_com + 3 * i);
+        cd_v3_add(c, x + 3 * (i - b), t);
+        if (m->body_jnt_type[b] == CD_JOINT_PRISMATIC) { I += m->body_mass[i]; continue; } /* a slider: its mass */
+        cd_m3_rotsym(Iw, R + 9 * (i - b), m->body_inertia + 9 * i);
+        cd_m3_mulv(Ia, Iw, ax);
+        cd_v3_cross(r, c, ax);
+        I += cd_v3_dot(ax, Ia) + m->body_mass[i] * cd_v3_dot(r, r);
+    }
+    free(R);
+    free(x);
+    return I;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return x < y ? -1 : x > y;
+}
+
+/* Finalize's joint part: numbers the stops and frictions, resolves their
+ * default laws, checks q0 against the limits and collects the schedule's
+ * breakpoints. */
+static cd_status finalize_joints(cd_model *m, cd_error *err)
+{
+    int b, nl = 0, nf = 0, np = 0, a, i, nb = 0;
+    for (b = 0; b < m->nbody; b++) {
+        if (m->body_presc[b] != CD_PRESCRIBE_NONE) np++;
+        if (m->body_parent[b] < 0) continue;
+        if (m->body_lim_id[b] >= 0) {
+            double *L = m->body_limit + 6 * b, Ia = subtree_axis_inertia(m, b);
+            if (m->body_q0[b] < L[0] || m->body_q0[b] > L[1]) {
+                seterr(err, CD_EINVAL, "joint '%s': initial position %g is outside its limits [%g, %g]", m->body_name[b],
+                       m->body_q0[b], L[0], L[1]);
+                return CD_EINVAL;
+            }
+            if (L[2] == 0) L[2] = 1e3;
+            if (L[4] == 0) L[4] = 1.0;
+            if (L[5] == 0) L[5] = 1.0;
+            if (L[3] == 0) L[3] = 2.0 * sqrt(L[2] * Ia);
+            m->body_lim_id[b] = nl++;
+        }
+        if (m->body_fric[3 * b] > 0) {
+            double *F = m->body_fric + 3 * b;
+            if (F[1] == 0) F[1] = F[0] / 1e-4;
+            if (F[2] == 0) F[2] = 2.0 * sqrt(F[1] * subtree_axis_inertia(m, b));
+            m->body_fric_id[b] = nf++;
+        } else {
+            m->body_fric_id[b] = -1;
+        }
+    }
+    free(m->lim_body); free(m->fric_body); free(m->breaks);
+    m->lim_body = malloc((size_t)(nl ? nl : 1) * sizeof(int));
+    m->fric_body = malloc((size_t)(nf ? nf : 1) * sizeof(int));
+    m->breaks = malloc((size_t)(m->ntbl + m->nbody + 1) * sizeof(double));
+    if (!m->lim_body || !m->fric_body || !m->breaks) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+    for (b = 0; b < m->nbody; b++) {
+        if (m->body_parent[b] >= 0 && m->body_lim_id[b] >= 0) m->lim_body[m->body_lim_id[b]] = b;
+        if (m->body_fric_id[b] >= 0) m->fric_body[m->body_fric_id[b]] = b;
+        if (m->body_presc[b] == CD_PRESCRIBE_WAYPOINTS)
+            for (i = 0; i < m->body_wp_n[b]; i++) m->breaks[nb++] = m->tbl_t[m->body_wp_adr[b] + i];
+        if (m->body_presc[b] == CD_PRESCRIBE_VELOCITY && m->body_parent[b] >= 0) m->breaks[nb++] = m->body_presc_prm[6 * b + 1];
+    }
+    for (a = 0; a < m->nu; a++)
+        for (i = 0; i < m->act_tbl_n[a]; i++) m->breaks[nb++] = m->tbl_t[m->act_tbl_adr[a] + i];
+    qsort(m->breaks, (size_t)nb, sizeof(double), cmp_double);
+    for (i = 0, a = 0; i < nb; i++)
+        if (a == 0 || m->breaks[i] != m->breaks[a - 1]) m->breaks[a++] = m->breaks[i];
+    m->nbreak = a;
+    m->nlim = nl;
+    m->nfric = nf;
+    m->npresc = np;
     return CD_OK;
 }
 
@@ -764,9 +1109,15 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     if (!m->face_vert || !m->face_plane) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
     for (i = 0; i < m->nshape; i++)
         if (m->shape_type[i] == CD_SHAPE_CONVEX) hull_faces(m, i, 1, m->shape_face_adr[i]);
+    {
+        cd_status st = finalize_joints(m, err);
+        if (st != CD_OK) return st;
+    }
     m->nv = nv;
     m->ny_slot_adr = ny;
-    m->ny = ny + 3 * nslot;
+    m->ny_fric_adr = ny + 3 * nslot;
+    m->ny = m->ny_fric_adr + m->nfric;
+    m->nsw = nslot + m->nlim + m->nfric + m->nuser;
     m->finalized = 1;
     return CD_OK;
 }

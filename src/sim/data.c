@@ -1,84 +1,159 @@
-/* cd_data: creation (the only allocation besides the model), reset and the
- * event log. */
+/* cd_data: creation (one block for every array, from the caller's allocator
+ * or malloc), reset and the callbacks. The integrator's GSL objects are the
+ * only other allocation (GSL allocates them itself). */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "integ.h"
 
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
-static const char *ev_names[CD_EV_NKINDS] = {
-    "onset", "separation", "stick_slip", "slip_stick", "slip_turn", "geometry_failure"};
-static const char *mode_names[3] = {"open", "stick", "slip"};
-
-const char *cd_event_kind_name(cd_event_kind k)
-{ return (k >= 0 && k < CD_EV_NKINDS) ? ev_names[k] : "?"; }
-const char *cd_slot_mode_name(cd_slot_mode mo)
-{ return (mo >= 0 && mo <= CD_MODE_SLIP) ? mode_names[mo] : "?"; }
+static void *std_alloc(size_t n, void *ctx) { (void)ctx; return malloc(n); }
+static void std_free(void *p, void *ctx) { (void)ctx; free(p); }
 
 void cd_data_free(cd_data *d)
 {
+    cd_allocator a;
     if (!d) return;
     cd_integ_free(d->integ);
-    free(d->y); free(d->ydot); free(d->body_R); free(d->body_x); free(d->body_c);
-    free(d->body_w); free(d->body_v); free(d->body_axisw); free(d->body_V); free(d->body_S);
-    free(d->sys_ref); free(d->udot); free(d->tau); free(d->body_fext); free(d->body_fuser);
-    free(d->H); free(d->work); free(d->jwork); free(d->body_rbi);
-    free(d->slot_mode); free(d->slot_dir); free(d->slot_va); free(d->slot_tswitch); free(d->slot_x);
-    free(d->slot_xdot); free(d->slot_fn); free(d->slot_ft); free(d->slot_point);
-    free(d->slot_normal); free(d->slot_vt); free(d->slot_fnraw); free(d->slot_geomfail); free(d->slot_held);
-    free(d->ev);
-    free(d);
+    a = d->allocator;
+    a.free(d->block, a.ctx);
 }
 
-cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
+/* Lays the arrays out in one block: with base == NULL only measures. Every
+ * array starts on a 16-byte boundary; an empty array still gets one element
+ * so that no pointer is NULL. */
+static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
 {
-    cd_data *d;
-    int maxdof = 1, s, nb, ns, ok = 1;
+    size_t off = 0;
+    int nb = m->nbody, ns = m->nslot;
+#define CARVE(field, n)                                                              \
+    do {                                                                             \
+        size_t cnt_ = (size_t)(n) > 0 ? (size_t)(n) : 1;                              \
+        off = (off + 15) & ~(size_t)15;                                              \
+        if (base) d->field = (void *)(base + off);                                   \
+        off += cnt_ * sizeof *d->field;                                              \
+    } while (0)
+    off = sizeof(cd_data);
+    CARVE(y, m->ny); CARVE(ydot, m->ny); CARVE(ypresc, m->ny);
+    CARVE(ctrl, m->nu); CARVE(qfrc_applied, m->nv); CARVE(xfrc_applied, 6 * nb); CARVE(xfrc_body, 6 * nb);
+    CARVE(user_mode, m->nuser);
+    CARVE(body_R, 9 * nb); CARVE(body_x, 3 * nb); CARVE(body_c, 3 * nb); CARVE(body_w, 3 * nb);
+    CARVE(body_v, 3 * nb); CARVE(body_axisw, 3 * nb); CARVE(body_V, 6 * nb); CARVE(body_S, 6 * nb);
+    CARVE(sys_ref, 3 * m->nsys);
+    CARVE(udot, m->nv); CARVE(qfrc_actuator, m->nv); CARVE(qfrc_passive, m->nv); CARVE(qfrc_constraint, m->nv);
+    CARVE(tau, m->nv); CARVE(act_force, m->nu); CARVE(act_velocity, m->nu);
+    CARVE(body_fext, 6 * nb); CARVE(H, maxdof * maxdof); CARVE(work, 12 * nb + 4 * maxdof);
+    CARVE(jwork, 12 * maxdof + 36);
+    {
+        size_t cnt = (size_t)(2 * nb) * sizeof(cd_rbi);
+        off = (off + 15) & ~(size_t)15;
+        if (base) d->body_rbi = base + off;
+        off += cnt;
+    }
+    CARVE(slot_mode, ns); CARVE(slot_dir, 3 * ns); CARVE(slot_x, ns);
+    CARVE(slot_xdot, ns); CARVE(slot_fn, ns); CARVE(slot_ft, 3 * ns); CARVE(slot_point, 3 * ns);
+    CARVE(slot_normal, 3 * ns); CARVE(slot_vt, 3 * ns); CARVE(slot_va, 3 * ns); CARVE(slot_fnraw, ns);
+    CARVE(slot_geomfail, ns);
+    CARVE(lim_mode, m->nlim); CARVE(lim_depth, m->nlim); CARVE(lim_force, m->nlim); CARVE(lim_raw, m->nlim);
+    CARVE(fric_mode, m->nfric); CARVE(fric_dir, m->nfric); CARVE(fric_force, m->nfric);
+    CARVE(sw_tswitch, m->nsw); CARVE(sw_nswitch, m->nsw); CARVE(sw_held, m->nsw);
+    CARVE(act_piece, m->nu);
+    CARVE(ev, d ? d->ev_cap : 0);
+#undef CARVE
+    return off;
+}
+
+cd_data *cd_data_create_ex(const cd_model *m, int event_capacity, const cd_allocator *alloc, cd_error *err)
+{
+    cd_data probe, *d;
+    cd_allocator a;
+    int maxdof = 1, s;
+    size_t size;
+    char *block;
     if (!m || !m->finalized) {
-        if (err) { err->status = CD_EINVAL; snprintf(err->msg, sizeof err->msg, "model is NULL or not finalized"); }
+        cd_error_set(err, CD_EINVAL, "model is NULL or not finalized");
         return NULL;
     }
     /* m->opt may have been edited after finalize; GSL would abort on some values */
     if (cd_options_check(&m->opt, err) != CD_OK) return NULL;
-    d = calloc(1, sizeof *d);
-    if (!d) goto nomem;
+    if (m->ny == 0) {
+        /* nothing can move and nothing can touch: GSL cannot integrate a 0-dimensional system */
+        cd_error_set(err, CD_EINVAL, "model has no degree of freedom and no contact slot: nothing to simulate");
+        return NULL;
+    }
+    if (event_capacity < 0 || event_capacity > 100000000) {
+        cd_error_set(err, CD_EINVAL, "event capacity %d out of range [0, 1e8]", event_capacity);
+        return NULL;
+    }
+    if (alloc && (!alloc->alloc || !alloc->free)) {
+        cd_error_set(err, CD_EINVAL, "allocator needs both alloc and free");
+        return NULL;
+    }
+    a.alloc = alloc ? alloc->alloc : std_alloc;
+    a.free = alloc ? alloc->free : std_free;
+    a.ctx = alloc ? alloc->ctx : NULL;
     for (s = 0; s < m->nsys; s++)
         if (m->sys_ndof[s] > maxdof) maxdof = m->sys_ndof[s];
-    nb = m->nbody;
-    ns = m->nslot ? m->nslot : 1;
-#define AL(p, n) ok &= ((d->p = calloc((size_t)(n), sizeof *d->p)) != NULL)
-    AL(y, m->ny + 1); AL(ydot, m->ny + 1);
-    AL(body_R, 9 * nb); AL(body_x, 3 * nb); AL(body_c, 3 * nb); AL(body_w, 3 * nb);
-    AL(body_v, 3 * nb); AL(body_axisw, 3 * nb); AL(body_V, 6 * nb); AL(body_S, 6 * nb);
-    AL(sys_ref, 3 * m->nsys); AL(udot, m->nv + 1); AL(tau, m->nv + 1);
-    AL(body_fext, 6 * nb); AL(body_fuser, 6 * nb);
-    AL(H, maxdof * maxdof); AL(work, 12 * nb + 4 * maxdof); AL(jwork, 12 * maxdof + 36);
-    AL(slot_mode, ns); AL(slot_dir, 3 * ns); AL(slot_va, 3 * ns); AL(slot_tswitch, ns); AL(slot_x, ns);
-    AL(slot_xdot, ns); AL(slot_fn, ns); AL(slot_ft, 3 * ns); AL(slot_point, 3 * ns);
-    AL(slot_normal, 3 * ns); AL(slot_vt, 3 * ns); AL(slot_fnraw, ns); AL(slot_geomfail, ns); AL(slot_held, ns);
-#undef AL
-    if (ok) ok = (d->body_rbi = calloc((size_t)(2 * nb), sizeof(cd_rbi))) != NULL;
-    d->ev_cap = event_capacity > 0 ? event_capacity : 4096;
-    if (ok) ok = (d->ev = calloc((size_t)d->ev_cap, sizeof *d->ev)) != NULL;
-    if (!ok) goto nomem;
+    memset(&probe, 0, sizeof probe);
+    probe.ev_cap = event_capacity > 0 ? event_capacity : 4096;
+    size = carve(m, &probe, NULL, maxdof);
+    block = a.alloc(size, a.ctx);
+    if (!block) {
+        cd_error_set(err, CD_ENOMEM, "out of memory creating data (%zu bytes)", size);
+        return NULL;
+    }
+    memset(block, 0, size);
+    d = (cd_data *)(void *)block;
+    d->ev_cap = probe.ev_cap;
+    carve(m, d, block, maxdof);
+    d->block = block;
+    d->allocator = a;
+    d->opt = m->opt;
+    d->slot_tswitch = d->sw_tswitch;   /* the slots are the first switch units */
+    d->slot_held = d->sw_held;
     d->integ = cd_integ_create(m, d, err);
-    if (!d->integ) { cd_data_free(d); return NULL; }
-    cd_data_reset(m, d);
+    if (!d->integ) {
+        a.free(block, a.ctx);
+        return NULL;
+    }
+    if (cd_data_reset(m, d, err) != CD_OK) {
+        cd_data_free(d);
+        return NULL;
+    }
     return d;
-nomem:
-    cd_data_free(d);
-    if (err) { err->status = CD_ENOMEM; snprintf(err->msg, sizeof err->msg, "out of memory creating data"); }
-    return NULL;
 }
 
-void cd_data_reset(const cd_model *m, cd_data *d)
+cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
+{
+    return cd_data_create_ex(m, event_capacity, NULL, err);
+}
+
+void cd_data_set_control(cd_data *d, cd_control_fn fn, void *user)
+{
+    d->control = fn;
+    d->control_user = user;
+}
+
+void cd_data_set_user_switches(cd_data *d, cd_user_switch_fn g, cd_user_transition_fn tr, void *user)
+{
+    d->user_switch = g;
+    d->user_transition = tr;
+    d->switch_user = user;
+}
+
+cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
 {
     int s, b, k;
     d->t = 0.0;
     memset(d->y, 0, (size_t)m->ny * sizeof(double));
-    memset(d->body_fuser, 0, 6 * (size_t)m->nbody * sizeof(double));
+    memset(d->ctrl, 0, (size_t)m->nu * sizeof(double));
+    memset(d->qfrc_applied, 0, (size_t)m->nv * sizeof(double));
+    memset(d->xfrc_applied, 0, 6 * (size_t)m->nbody * sizeof(double));
+    memset(d->xfrc_body, 0, 6 * (size_t)m->nbody * sizeof(double));
+    memset(d->user_mode, 0, (size_t)m->nuser * sizeof(int));
     for (s = 0; s < m->nsys; s++) {
         cd_sys_state x = cd_state_of(m, d, s);
         int b0 = m->sys_body_adr[s];
@@ -95,22 +170,24 @@ void cd_data_reset(const cd_model *m, cd_data *d)
     }
     for (k = 0; k < m->nslot; k++) {
         d->slot_mode[k] = CD_MODE_OPEN;
-        d->slot_tswitch[k] = -HUGE_VAL;
-        d->slot_held[k] = 0;
         cd_v3_zero(d->slot_dir + 3 * k);
     }
+    for (k = 0; k < m->nlim; k++) d->lim_mode[k] = CD_LIM_FREE;
+    for (k = 0; k < m->nfric; k++) {
+        d->fric_mode[k] = CD_MODE_STICK;
+        d->fric_dir[k] = 0;
+    }
+    for (k = 0; k < m->nsw; k++) {
+        d->sw_tswitch[k] = -HUGE_VAL;
+        d->sw_nswitch[k] = 0;
+        d->sw_held[k] = 0;
+    }
+    memset(d->act_piece, 0, (size_t)m->nu * sizeof(int));
     d->ev_count = 0;
     memset(&d->stats, 0, sizeof d->stats);
     d->stats.h_min_seen = HUGE_VAL;
     cd_integ_reset(m, d);
-    /* contacts already closed at t = 0 start sticking (see docs/contact.md) */
-    cd_integ_initial_modes(m, d);
-}
-
-const cd_event *cd_data_event(const cd_data *d, long i)
-{
-    long held = d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap;
-    long first = d->ev_count - held;
-    if (i < 0 || i >= held) return NULL;
-    return &d->ev[(first + i) % d->ev_cap];
+    /* contacts and stops already closed at t = 0 start closed (docs/contact.md),
+     * optionally preloaded to static equilibrium */
+    return cd_integ_initial_modes(m, d, err);
 }

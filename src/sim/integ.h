@@ -3,11 +3,22 @@
 #define CD_INTEG_H
 #include "capdyn/sim.h"
 
+/* Creates the integrator of d (GSL objects and buffers); NULL with err. */
 void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err);
 void cd_integ_free(void *integ);
+/* Back to the start of a run: step size, guard, stepper history. */
 void cd_integ_reset(const cd_model *m, cd_data *d);
-/* Closes (stick) every slot whose switching function says it is in contact
- * at the current state; used at reset. */
-void cd_integ_initial_modes(const cd_model *m, cd_data *d);
+/* Closes every slot and stop whose switching function says it is in contact
+ * at the current state (used at reset), and with opt.equilibrium_start
+ * preloads them to static equilibrium (src/sim/equilibrium.c). */
+cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err);
+
+/* The integrator's part of the complete state (cd_state_*). */
+int cd_integ_state_size(const cd_model *m);
+void cd_integ_state_get(const cd_model *m, cd_data *d, double *buf);
+void cd_integ_state_set(const cd_model *m, cd_data *d, const double *buf);
+
+/* Static equilibrium of the closed contacts and stops (equilibrium.c). */
+cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err);
 
 #endif

@@ -3,47 +3,75 @@
  * GSL odeiv2 is driven one accepted step at a time (gsl_odeiv2_evolve_apply)
  * with the step, control and evolve objects of a gsl_odeiv2_driver allocated
  * once at cd_data_create (the driver object is needed by msbdf). After every
- * accepted step the switching functions of all slots are evaluated; if any
- * changed sign, the crossing is located by Illinois (modified regula falsi)
- * iterations, each one a single step of a one-step "locator" stepper (rk8pd;
- * classic RK4 in fixed-step mode) of trial length tau from the saved start state, so
- * the located state is the integrator's own solution, not an interpolant.
- * The bracket is shrunk to event_tol; the state lands on the far end (already
- * on the new side), the modes switch, and the stepper is reset: inside a
- * segment the rhs is smooth and the adaptive control stays honest.
+ * accepted step the switching functions of every switch unit (src/sim/switch.h:
+ * contact slots, joint stops, joint friction, user switches) are evaluated; if
+ * any changed sign, the crossing is located by Illinois (modified regula
+ * falsi) iterations, each one a single step of a one-step "locator" stepper
+ * (rk8pd; classic RK4 in fixed-step mode) of trial length tau from the saved
+ * start state, so the located state is the integrator's own solution, not an
+ * interpolant. The bracket is shrunk to event_tol; the state lands on the far
+ * end (already on the new side), the unit's provider applies its transition,
+ * and the stepper is reset: inside a segment the rhs is smooth and the
+ * adaptive control stays honest.
  *
- * Chattering guard: a slot may switch at most twice in quick succession
+ * Time events: steps never cross a schedule breakpoint (STEPS/TABLE rows,
+ * waypoints, m->breaks); there the rows switch, the stepper restarts and the
+ * modes are re-checked, so a torque step is exact. Call boundaries: the
+ * inputs and the state at the end of a call are remembered; if the caller
+ * changed either before the next call, the stepper restarts there and the
+ * modes are re-checked; if not, the run continues as if it had not stopped
+ * (only the step that landed on the boundary was clipped).
+ *
+ * Chattering guard: a unit may switch at most twice in quick succession
  * (each switch within `dwell` of the previous one: onset followed by an
  * immediate slip at one instant, or two flips landing event_tol apart);
  * after that its switching functions are ignored until `dwell` seconds have
- * passed since its last switch, and steps
- * are clamped to end when a dwell expires, where the slot is re-checked and
- * switched at once if needed (counted in stats.nwarn_dwell).
+ * passed since its last switch, and steps are clamped to end when a dwell
+ * expires, where the unit is re-checked and switched at once if needed
+ * (counted in stats.nwarn_dwell).
  *
  * Quaternions are renormalised after every accepted step and every landing
- * (the rhs also uses q/|q|), which keeps |q| - 1 at round-off. */
+ * (the rhs also uses q/|q|), which keeps |q| - 1 at round-off; prescribed
+ * coordinates are set to their exact profile at the same places. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
-#include "../contact/contact.h"
+#include "../mechanism/actuation.h"
+#include "../kinematics/prescribed.h"
 #include "integ.h"
+#include "switch.h"
 
 #include <gsl/gsl_errno.h>
 #include <gsl/gsl_odeiv2.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+/* Reserve of evaluations a located event needs after its iterations: the
+ * landing (1) and the zero-time mode cascade (settle_modes: at most 5). */
+#define CD_BUDGET_RESERVE 6
+
 typedef struct {
-    const cd_model *m;
+    const cd_model *m;        /* set for the duration of one call only: the data keeps no model pointer */
     cd_data *d;
     gsl_odeiv2_system sys;
     gsl_odeiv2_driver *drv;   /* adaptive steppers (NULL in fixed mode) */
     gsl_odeiv2_step *loc;     /* rk8pd one-step locator (adaptive modes; NULL in fixed mode) */
     double *y0, *ylo, *yhi, *yerr, *fd_f0, *fd_y;
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
-    int *nswitch_now;         /* (nslot) switches within `dwell` of the slot's last one */
-    double h;                 /* next trial step */
-    int fixed;
+    double *in_snap;          /* inputs at the end of the last call */
+    double *y_end;            /* y at the end of the last call */
+    int nin;                  /* inputs: nu + nv + 12 nbody */
+    double t_end, h;          /* time at the end of the last call; next trial step */
+    double rtol_set, atol_set;/* the tolerances the GSL control was made with */
+    double step_t0, step_h;   /* cd_step: origin and step; t = step_t0 + step_k step_h */
+    long step_k;
+    long nrhs0;               /* d->stats.nrhs at the start of the call (budget) */
+    int have_end;             /* t_end, y_end and in_snap describe the end of a call */
+    int fsal;                 /* d->ydot is f(t, y) with the current modes and inputs */
+    int restart_pending;      /* the next call restarts the stepper (msbdf/rk4imp snapshot) */
+    int fixed, history;       /* fixed-step mode; the stepper keeps a history (msbdf, rk4imp) */
+    cd_stepper stepper;       /* the one the GSL objects were made for */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
@@ -68,7 +96,7 @@ static int jac(double t, const double y[], double *dfdy, double dfdt[], void *pa
 {
     cd_integ *I = (cd_integ *)params;
     int n = I->m->ny, i, j;
-    double eps = I->m->opt.fd_eps;
+    double eps = I->d->opt.fd_eps;
     if (rhs(t, y, I->fd_f0, params) != GSL_SUCCESS) return GSL_EBADFUNC;
     memcpy(I->fd_y, y, (size_t)n * sizeof(double));
     for (j = 0; j < n; j++) {
@@ -89,30 +117,40 @@ static int jac(double t, const double y[], double *dfdy, double dfdt[], void *pa
 void cd_integ_free(void *p)
 {
     cd_integ *I = (cd_integ *)p;
+    cd_allocator a;
     if (!I) return;
     if (I->drv) gsl_odeiv2_driver_free(I->drv);
     if (I->loc) gsl_odeiv2_step_free(I->loc);
-    free(I->y0); free(I->ylo); free(I->yhi); free(I->yerr); free(I->fd_f0); free(I->fd_y);
-    free(I->nswitch_now);
-    free(I->k1); free(I->k2); free(I->k3); free(I->k4); free(I->ytmp);
-    free(I);
+    a = I->d->allocator;
+    a.free(I, a.ctx);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err)
 {
-    cd_integ *I = calloc(1, sizeof *I);
     const gsl_odeiv2_step_type *T = NULL;
-    size_t n = (size_t)m->ny;
-    int ns = m->nslot ? m->nslot : 1;
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody), size;
+    cd_integ *I;
+    double *p;
+    /* one block: the struct, then 13 n + nin doubles */
+    size = sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double);
+    I = d->allocator.alloc(size, d->allocator.ctx);
     if (!I) goto nomem;
-    I->m = m;
+    memset(I, 0, size);
+    p = (double *)(void *)(((uintptr_t)(I + 1) + 15) & ~(uintptr_t)15);
+    I->y0 = p; p += n; I->ylo = p; p += n; I->yhi = p; p += n; I->yerr = p; p += n;
+    I->fd_f0 = p; p += n; I->fd_y = p; p += n; I->k1 = p; p += n; I->k2 = p; p += n;
+    I->k3 = p; p += n; I->k4 = p; p += n; I->ytmp = p; p += n; I->y_end = p; p += n;
+    I->in_snap = p;
+    I->nin = (int)nin;
     I->d = d;
     I->sys.function = rhs;
     I->sys.jacobian = jac;
     I->sys.dimension = n;
     I->sys.params = I;
-    I->fixed = m->opt.stepper == CD_STEP_RK4_FIXED;
-    switch (m->opt.stepper) {
+    I->stepper = d->opt.stepper;
+    I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
+    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP;
+    switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
     case CD_STEP_RK8PD: T = gsl_odeiv2_step_rk8pd; break;
@@ -120,46 +158,41 @@ void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err)
     case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
     default: T = NULL; break;
     }
-    if (n == 0) n = 1;
     if (!I->fixed) {
-        I->drv = gsl_odeiv2_driver_alloc_standard_new(&I->sys, T, m->opt.h_init, m->opt.atol,
-                                                      m->opt.rtol, 1.0, 1.0);
+        I->drv = gsl_odeiv2_driver_alloc_standard_new(&I->sys, T, d->opt.h_init, d->opt.atol, d->opt.rtol, 1.0, 1.0);
         if (!I->drv) goto nomem;
-    }
-    if (I->fixed) {
-        /* GSL's rk4 stepper, asked for an error estimate, takes a full step
-         * and two half steps and returns the latter (11 evaluations for an
-         * h/2 result): the embedding mode wants the classic 4-stage RK4. */
-        I->k1 = calloc(n, sizeof(double)); I->k2 = calloc(n, sizeof(double));
-        I->k3 = calloc(n, sizeof(double)); I->k4 = calloc(n, sizeof(double));
-        I->ytmp = calloc(n, sizeof(double));
-        if (!I->k1 || !I->k2 || !I->k3 || !I->k4 || !I->ytmp) goto nomem;
-    } else {
+        I->rtol_set = d->opt.rtol;
+        I->atol_set = d->opt.atol;
         I->loc = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, n);
         if (!I->loc) goto nomem;
     }
-    I->y0 = calloc(n, sizeof(double)); I->ylo = calloc(n, sizeof(double));
-    I->yhi = calloc(n, sizeof(double)); I->yerr = calloc(n, sizeof(double));
-    I->fd_f0 = calloc(n, sizeof(double)); I->fd_y = calloc(n, sizeof(double));
-    I->nswitch_now = calloc((size_t)ns, sizeof(int));
-    if (!I->y0 || !I->ylo || !I->yhi || !I->yerr || !I->fd_f0 || !I->fd_y || !I->nswitch_now)
-        goto nomem;
     return I;
 nomem:
-    cd_integ_free(I);
-    if (err) { err->status = CD_ENOMEM; snprintf(err->msg, sizeof err->msg, "out of memory creating the integrator"); }
+    if (I) cd_integ_free(I);
+    cd_error_set(err, CD_ENOMEM, "out of memory creating the integrator");
     return NULL;
+}
+
+static void restart(cd_data *d, cd_integ *I)
+{
+    if (I->drv) gsl_odeiv2_driver_reset(I->drv);
+    I->fsal = 0;
+    d->stats.nrestart++;
 }
 
 void cd_integ_reset(const cd_model *m, cd_data *d)
 {
     cd_integ *I = (cd_integ *)d->integ;
-    I->h = I->fixed ? m->opt.h_fixed : m->opt.h_init;
-    if (I->drv) {
-        gsl_odeiv2_driver_reset(I->drv);
-    }
+    (void)m;
+    I->h = I->fixed ? d->opt.h_fixed : d->opt.h_init;
+    if (I->drv) gsl_odeiv2_driver_reset(I->drv);
     if (I->loc) gsl_odeiv2_step_reset(I->loc);
-    memset(I->nswitch_now, 0, (size_t)(m->nslot ? m->nslot : 1) * sizeof(int));
+    I->have_end = 0;
+    I->fsal = 0;
+    I->restart_pending = 0;
+    I->step_k = 0;
+    I->step_h = 0;
+    I->step_t0 = 0;
 }
 
 static void renormalize(const cd_model *m, cd_data *d)
@@ -175,143 +208,81 @@ static void renormalize(const cd_model *m, cd_data *d)
     }
 }
 
-static int in_dwell(const cd_model *m, const cd_data *d, const cd_integ *I, int k)
+/* after a step or a landing: unit quaternions, exact prescribed coordinates */
+static void clean_state(const cd_model *m, cd_data *d)
 {
-    return I->nswitch_now[k] >= 2 && d->t - d->slot_tswitch[k] < m->opt.dwell;
+    renormalize(m, d);
+    if (m->npresc) cd_prescribed_apply(m, d->t, d->y);
 }
 
-/* min over active slots of the switching functions at d's current state
- * (after cd_forward); the slot and function achieving it in *which. */
-static double gmin(const cd_model *m, const cd_data *d, const cd_integ *I, int use_dwell, int *which)
+static int in_dwell(const cd_data *d, int u)
 {
-    int k;
-    double best = HUGE_VAL;
+    return d->sw_nswitch[u] >= 2 && d->t - d->sw_tswitch[u] < d->opt.dwell;
+}
+
+/* min over watched units of the switching functions at d's current state
+ * (after cd_forward); the unit achieving it in *which. */
+static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *which)
+{
+    int u;
+    double best = HUGE_VAL, g[2];
     if (which) *which = -1;
-    for (k = 0; k < m->nslot; k++) {
-        double gn, gf;
-        if (use_dwell && in_dwell(m, d, I, k)) continue;
-        if (d->slot_geomfail[k]) continue;
-        cd_contact_switch(m, d, k, &gn, &gf);
-        if (gn < best) { best = gn; if (which) *which = 2 * k; }
-        if (gf < best) { best = gf; if (which) *which = 2 * k + 1; }
+    for (u = 0; u < m->nsw; u++) {
+        if (use_dwell && in_dwell(d, u)) continue;
+        if (cd_sw_skip(m, d, u)) continue;
+        cd_sw_functions(m, d, u, 0, g);
+        if (g[0] < best) { best = g[0]; if (which) *which = u; }
+        if (g[1] < best) { best = g[1]; if (which) *which = u; }
     }
     return best;
 }
 
-static void log_event(const cd_model *m, cd_data *d, int k, int kind, int from, int to)
+static void log_event(cd_data *d, const cd_event *ev)
 {
     cd_event *e = &d->ev[d->ev_count % d->ev_cap];
+    *e = *ev;
     e->t = d->t;
-    e->kind = kind;
-    e->slot = k;
-    e->body_a = k >= 0 ? m->cp_body[m->slot_cp[k]] : -1;
-    e->body_b = k >= 0 ? m->shape_body[m->slot_shape[k]] : -1;
-    e->mode_from = from;
-    e->mode_to = to;
-    e->x = k >= 0 ? d->slot_x[k] : 0;
-    e->fn = k >= 0 ? d->slot_fn[k] : 0;
-    e->ft = k >= 0 ? cd_v3_norm(d->slot_ft + 3 * k) : 0;
     d->ev_count++;
     d->stats.nevents++;
 }
 
-static void any_tangent(double t[3], const double n[3])
+/* the unit's transition under the chattering guard's bookkeeping: switches
+ * more than `dwell` apart start a new count; the second within the window
+ * holds the unit (its forces clipped, its functions unwatched) until the
+ * window ends. */
+static int counted_switch(const cd_model *m, cd_data *d, int u, int forgive)
 {
-    double a[3] = {1, 0, 0};
-    if (fabs(n[0]) > 0.9) cd_v3_set(a, 0, 1, 0);
-    cd_v3_cross(t, n, a);
-    cd_v3_normalize(t);
-}
-
-/* Applies the transition that slot k's switching functions call for, at the
- * current (landed) state, after cd_forward. Returns 1 if the mode changed. */
-/* Slot k's switching functions (cd_contact_switch). With forgive, zero-time
- * re-checks pardon round-off in the friction functions (e.g. slip -> stick
- * with mu_s = mu_k lands exactly on the cone and must not flip straight back). */
-static void switch_functions(const cd_model *m, const cd_data *d, int k, int forgive, double *gn, double *gf)
-{
-    int mode = d->slot_mode[k];
-    cd_contact_switch(m, d, k, gn, gf);
-    if (forgive && mode == CD_MODE_STICK && *gf >= -1e-9 * m->law[m->slot_law[k]].mu_s * d->slot_fn[k]) *gf = 0;
-    if (forgive && mode == CD_MODE_SLIP && *gf >= -1e-3 * m->opt.v_reg) *gf = 0;
-}
-
-static int switch_slot(const cd_model *m, cd_data *d, int k, int forgive)
-{
-    const cd_contact_law *L = &m->law[m->slot_law[k]];
-    double gn, gf, *z = d->y + m->ny_slot_adr + 3 * k;
-    const double *n = d->slot_normal + 3 * k, *ft = d->slot_ft + 3 * k, *vt = d->slot_vt + 3 * k;
-    int from = d->slot_mode[k], to = from, kind = -1;
-    switch_functions(m, d, k, forgive, &gn, &gf);
-    if (gn < 0) {
-        if (from == CD_MODE_OPEN) { to = CD_MODE_STICK; kind = CD_EV_ONSET; }
-        else { to = CD_MODE_OPEN; kind = CD_EV_SEPARATION; }
-        cd_v3_zero(z);
-    } else if (gf < 0 && from == CD_MODE_STICK) {
-        double nf = cd_v3_norm(ft), *s = d->slot_dir + 3 * k;
-        to = CD_MODE_SLIP;
-        kind = CD_EV_STICK_SLIP;
-        /* the slip goes where the stick spring is pulled: against f_t */
-        if (nf > 0) cd_v3_scale(s, ft, -1.0 / nf);
-        else if (cd_v3_norm(vt) > 0) { cd_v3_copy(s, vt); cd_v3_normalize(s); }
-        else any_tangent(s, n);
-    } else if (gf < 0 && from == CD_MODE_SLIP) {
-        const double *vs = d->slot_va + 3 * k;
-        double nv = cd_v3_norm(vs);
-        if (nv > 100.0 * m->opt.v_reg) {
-            /* 3-D slip that turned past 90 deg at speed: re-anchor, keep slipping */
-            kind = CD_EV_SLIP_TURN;
-            cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);
-        } else {
-            int i;
-            double zw[3];
-            to = CD_MODE_STICK;
-            kind = CD_EV_SLIP_STICK;
-            /* anchor so that f_t is continuous: -(K_t z + D_t v_t) = f_t,
-             * stored in the axes of the shape's body (see contact.c) */
-            for (i = 0; i < 3; i++) zw[i] = -(ft[i] + L->Dt * vt[i]) / L->Kt;
-            cd_m3_tmulv(z, d->body_R + 9 * m->shape_body[m->slot_shape[k]], zw);
-        }
-    }
-    if (kind < 0) return 0;
-    log_event(m, d, k, kind, from, to);
-    d->slot_mode[k] = to;
-    d->slot_tswitch[k] = d->t;
+    cd_event ev;
+    if (d->t - d->sw_tswitch[u] >= d->opt.dwell) d->sw_nswitch[u] = 0;
+    if (!cd_sw_transition(m, d, u, forgive, &ev)) return 0;
+    log_event(d, &ev);
+    d->sw_tswitch[u] = d->t;
+    if (++d->sw_nswitch[u] >= 2) d->sw_held[u] = 1;
     return 1;
 }
 
-/* switch_slot under the chattering guard's bookkeeping: switches more than
- * `dwell` apart start a new count; the second within the window holds the
- * slot (its forces clipped, its functions unwatched) until the window ends. */
-static int counted_switch(const cd_model *m, cd_data *d, cd_integ *I, int k, int forgive)
-{
-    if (d->t - d->slot_tswitch[k] >= m->opt.dwell) I->nswitch_now[k] = 0;
-    if (!switch_slot(m, d, k, forgive)) return 0;
-    if (++I->nswitch_now[k] >= 2) d->slot_held[k] = 1;
-    return 1;
-}
-
-/* Switch every slot whose functions are negative at the current state, with
- * zero-time cascades (e.g. onset -> slip) bounded by the chattering guard. */
+/* Switch every unit whose functions are negative at the current state, with
+ * zero-time cascades (e.g. onset -> slip) bounded by the chattering guard.
+ * Leaves d evaluated (ydot valid for the modes it ends with). */
 static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *changed)
 {
-    int round, k, any;
+    int round, u, any;
     cd_status st;
     *changed = 0;
-    for (k = 0; k < m->nslot; k++) /* guard windows that have passed */
-        if (d->slot_held[k] && d->t - d->slot_tswitch[k] >= m->opt.dwell) d->slot_held[k] = 0;
+    for (u = 0; u < m->nsw; u++) /* guard windows that have passed */
+        if (d->sw_held[u] && d->t - d->sw_tswitch[u] >= d->opt.dwell) d->sw_held[u] = 0;
     for (round = 0; round < 4; round++) {
         st = cd_forward(m, d);
         d->stats.nrhs++;
         if (st != CD_OK) return st;
         any = 0;
-        for (k = 0; k < m->nslot; k++) {
-            double gn, gf;
-            if (d->slot_geomfail[k]) continue;
-            switch_functions(m, d, k, 1, &gn, &gf);
-            if (!(gn < 0 || gf < 0)) continue;
-            if (in_dwell(m, d, I, k)) { d->stats.nwarn_dwell++; continue; }
-            if (counted_switch(m, d, I, k, 1)) any = 1;
+        for (u = 0; u < m->nsw; u++) {
+            double g[2];
+            if (cd_sw_skip(m, d, u)) continue;
+            cd_sw_functions(m, d, u, 1, g);
+            if (!(g[0] < 0 || g[1] < 0)) continue;
+            if (in_dwell(d, u)) { d->stats.nwarn_dwell++; continue; }
+            if (counted_switch(m, d, u, 1)) any = 1;
         }
         if (!any) break;
         *changed = 1;
@@ -321,26 +292,53 @@ static cd_status settle_modes(const cd_model *m, cd_data *d, cd_integ *I, int *c
         d->stats.nrhs++;
         if (st != CD_OK) return st;
     }
+    I->fsal = 1;
     return CD_OK;
 }
 
-void cd_integ_initial_modes(const cd_model *m, cd_data *d)
+cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err)
 {
-    int k;
-    if (cd_forward(m, d) != CD_OK) return;
+    int k, any = 0;
+    /* with an equilibrium start, a check point placed exactly on a surface
+     * (|x| at round-off of the placement) counts as closed */
+    double tol = d->opt.equilibrium_start ? 1e-9 : 0.0;
+    if (m->npresc) cd_prescribed_apply(m, d->t, d->y);
+    if (cd_forward(m, d) != CD_OK) {
+        cd_error_set(err, CD_ENUMERIC, "the initial state cannot be evaluated (non-finite value or singular mass matrix)");
+        return CD_ENUMERIC;
+    }
     for (k = 0; k < m->nslot; k++)
-        if (!d->slot_geomfail[k] && d->slot_x[k] > 0) {
+        if (!d->slot_geomfail[k] && d->slot_x[k] > -tol && (d->slot_x[k] > 0 || tol > 0)) {
             d->slot_mode[k] = CD_MODE_STICK;
-            d->slot_tswitch[k] = d->t;
+            d->sw_tswitch[k] = d->t;
+            any = 1;
         }
-    (void)cd_forward(m, d);
+    for (k = 0; k < m->nlim; k++)
+        if (d->lim_depth[k] > -tol && (d->lim_depth[k] > 0 || tol > 0)) {
+            int b = m->lim_body[k];
+            double q = cd_joint_q(m, d, b);
+            d->lim_mode[k] = fabs(q - m->body_limit[6 * b]) < fabs(q - m->body_limit[6 * b + 1]) ? CD_LIM_LOWER : CD_LIM_UPPER;
+            d->sw_tswitch[m->nslot + k] = d->t;
+            any = 1;
+        }
+    if (d->opt.equilibrium_start && (any || m->nfric)) {
+        cd_status st = cd_equilibrium_start(m, d, err);
+        if (st != CD_OK) return st;
+    }
+    if (cd_forward(m, d) != CD_OK) {
+        cd_error_set(err, CD_ENUMERIC, "the initial state cannot be evaluated (non-finite value or singular mass matrix)");
+        return CD_ENUMERIC;
+    }
+    return CD_OK;
 }
 
-/* Classic RK4, y advanced in place by h: 4 evaluations, no allocation. */
-static int rk4_step(cd_integ *I, double t, double h, double *y)
+/* Classic RK4, y advanced in place by h: 4 evaluations, 3 when d->ydot
+ * already holds f(t, y) (the previous step's end evaluation). */
+static int rk4_step(cd_integ *I, double t, double h, double *y, int use_fsal)
 {
     size_t n = (size_t)I->m->ny, i;
-    if (rhs(t, y, I->k1, I) != GSL_SUCCESS) return GSL_EBADFUNC;
+    if (use_fsal) memcpy(I->k1, I->d->ydot, n * sizeof(double));
+    else if (rhs(t, y, I->k1, I) != GSL_SUCCESS) return GSL_EBADFUNC;
     for (i = 0; i < n; i++) I->ytmp[i] = y[i] + 0.5 * h * I->k1[i];
     if (rhs(t + 0.5 * h, I->ytmp, I->k2, I) != GSL_SUCCESS) return GSL_EBADFUNC;
     for (i = 0; i < n; i++) I->ytmp[i] = y[i] + 0.5 * h * I->k2[i];
@@ -355,7 +353,7 @@ static int rk4_step(cd_integ *I, double t, double h, double *y)
  * fixed-step mode) of length h from (t, y), y updated in place. */
 static int one_step(cd_integ *I, double t, double h, double *y)
 {
-    if (I->fixed) return rk4_step(I, t, h, y);
+    if (I->fixed) return rk4_step(I, t, h, y, 0);
     gsl_odeiv2_step_reset(I->loc);
     return gsl_odeiv2_step_apply(I->loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
@@ -370,6 +368,7 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
     if (st != GSL_SUCCESS) return CD_ENUMERIC;
     d->y = y;
     d->t = t0 + tau;
+    if (m->npresc) cd_prescribed_apply(m, d->t, y);
     st = cd_forward(m, d);
     d->stats.nrhs++;
     return st == CD_OK ? CD_OK : CD_ENUMERIC;
@@ -377,12 +376,21 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
 
 /* Back to the start of the step after a failure: d holds the last good
  * state (y0 at t0) with its outputs evaluated, as cd_sim_advance promises. */
-static void restore_start(const cd_model *m, cd_data *d, const cd_integ *I, double t0, double *ystate)
+static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0, double *ystate)
 {
     d->y = ystate;
     memcpy(d->y, I->y0, (size_t)m->ny * sizeof(double));
     d->t = t0;
     (void)cd_forward(m, d);
+    I->fsal = 0;
+}
+
+/* evaluations one more locator iteration costs (its stages and the forward) */
+static long trial_cost(const cd_integ *I) { return I->fixed ? 5 : 14; }
+
+static int budget_left(const cd_data *d, const cd_integ *I, long need)
+{
+    return d->opt.max_evals <= 0 || d->stats.nrhs - I->nrhs0 + need + CD_BUDGET_RESERVE <= d->opt.max_evals;
 }
 
 /* Locate the first zero of gmin in (t0, t1] given gmin(t0) >= 0 > gmin(t1),
@@ -398,18 +406,20 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     d->y = I->y0;
     d->t = t0;
     st = cd_forward(m, d);
+    d->stats.nrhs++;
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-    glo = gmin(m, d, I, 1, NULL);
+    glo = gmin(m, d, 1, NULL);
     if (!(glo > 0)) glo = 0.0;
-    for (it = 0; it < 200 && hi - lo > m->opt.event_tol; it++) {
+    for (it = 0; it < 200 && hi - lo > d->opt.event_tol; it++) {
         double tau, g, w = hi - lo;
+        if (!budget_left(d, I, trial_cost(I))) { d->stats.nwarn_budget++; break; }
         /* Illinois: secant on the bracket, the stale end's value halved */
         tau = (glo - ghi) != 0 ? lo + glo * w / (glo - ghi) : lo + 0.5 * w;
         if (!(tau > lo + 0.01 * w && tau < hi - 0.01 * w)) tau = lo + 0.5 * w;
         if (it % 4 == 3) tau = lo + 0.5 * w; /* a bisection now and then bounds the worst case */
         st = trial(m, d, I, t0, tau, I->ylo);
         if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-        g = gmin(m, d, I, 1, NULL);
+        g = gmin(m, d, 1, NULL);
         if (g < 0) {
             hi = tau; ghi = g;
             memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
@@ -428,20 +438,86 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     st = cd_forward(m, d);
     d->stats.nrhs++;
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-    (void)gmin(m, d, I, 1, trigger);
+    (void)gmin(m, d, 1, trigger);
     return CD_OK;
 }
 
-static double next_dwell_end(const cd_model *m, const cd_data *d, const cd_integ *I)
+static double next_dwell_end(const cd_model *m, const cd_data *d)
 {
-    int k;
+    int u;
     double t = HUGE_VAL;
-    for (k = 0; k < m->nslot; k++)
-        if (I->nswitch_now[k] >= 2) {
-            double e = d->slot_tswitch[k] + m->opt.dwell;
+    for (u = 0; u < m->nsw; u++)
+        if (d->sw_nswitch[u] >= 2) {
+            double e = d->sw_tswitch[u] + d->opt.dwell;
             if (e > d->t && e < t) t = e;
         }
     return t;
+}
+
+/* first schedule breakpoint after t */
+static double next_break(const cd_model *m, double t)
+{
+    int lo = 0, hi = m->nbreak;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (m->breaks[mid] <= t) lo = mid + 1; else hi = mid;
+    }
+    return lo < m->nbreak ? m->breaks[lo] : HUGE_VAL;
+}
+
+/* Switch the schedules' rows to those in force at d->t; logs one event per
+ * actuator whose row changed. Returns 1 if any did. */
+static int schedule_rows(const cd_model *m, cd_data *d, int log)
+{
+    int a, any = 0;
+    for (a = 0; a < m->nu; a++) {
+        int p;
+        if (m->act_tbl_n[a] == 0) continue;
+        p = cd_schedule_piece(m, a, d->t);
+        if (p == d->act_piece[a]) continue;
+        if (log) {
+            cd_event ev;
+            memset(&ev, 0, sizeof ev);
+            ev.kind = CD_EV_SCHEDULE;
+            ev.owner_kind = CD_OWNER_ACTUATOR;
+            ev.owner = a;
+            ev.slot = ev.body_a = ev.body_b = -1;
+            ev.mode_from = d->act_piece[a];
+            ev.mode_to = p;
+            log_event(d, &ev);
+        }
+        d->act_piece[a] = p;
+        any = 1;
+    }
+    return any;
+}
+
+/* the caller's inputs, gathered for comparison */
+static void inputs_get(const cd_model *m, const cd_data *d, double *buf)
+{
+    memcpy(buf, d->ctrl, (size_t)m->nu * sizeof(double));
+    buf += m->nu;
+    memcpy(buf, d->qfrc_applied, (size_t)m->nv * sizeof(double));
+    buf += m->nv;
+    memcpy(buf, d->xfrc_applied, 6 * (size_t)m->nbody * sizeof(double));
+    buf += 6 * m->nbody;
+    memcpy(buf, d->xfrc_body, 6 * (size_t)m->nbody * sizeof(double));
+}
+
+static int inputs_changed(const cd_model *m, const cd_data *d, const cd_integ *I)
+{
+    return memcmp(I->in_snap, d->ctrl, (size_t)m->nu * sizeof(double)) ||
+           memcmp(I->in_snap + m->nu, d->qfrc_applied, (size_t)m->nv * sizeof(double)) ||
+           memcmp(I->in_snap + m->nu + m->nv, d->xfrc_applied, 6 * (size_t)m->nbody * sizeof(double)) ||
+           memcmp(I->in_snap + m->nu + m->nv + 6 * m->nbody, d->xfrc_body, 6 * (size_t)m->nbody * sizeof(double));
+}
+
+static void remember_end(const cd_model *m, cd_data *d, cd_integ *I)
+{
+    memcpy(I->y_end, d->y, (size_t)m->ny * sizeof(double));
+    inputs_get(m, d, I->in_snap);
+    I->t_end = d->t;
+    I->have_end = 1;
 }
 
 static void seterr(cd_error *err, cd_status st, const char *msg, double t)
@@ -451,43 +527,82 @@ static void seterr(cd_error *err, cd_status st, const char *msg, double t)
     snprintf(err->msg, sizeof err->msg, "%s at t = %.9g s", msg, t);
 }
 
-cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb,
-                         void *user, cd_error *err)
+/* Start of a call: runtime options, and what the caller changed since the
+ * last one. Returns 1 if the modes must be re-checked before stepping. */
+static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st, cd_error *err)
+{
+    int state_changed, need = 0;
+    *st = CD_OK;
+    if (cd_options_check(&d->opt, err) != CD_OK) { *st = CD_EINVAL; return 0; }
+    if (d->opt.stepper != I->stepper) {
+        cd_error_set(err, CD_EINVAL, "opt.stepper cannot change after cd_data_create");
+        *st = CD_EINVAL;
+        return 0;
+    }
+    I->m = m;
+    I->nrhs0 = d->stats.nrhs;
+    if (!I->fixed && (d->opt.rtol != I->rtol_set || d->opt.atol != I->atol_set)) {
+        gsl_odeiv2_control_init(I->drv->c, d->opt.atol, d->opt.rtol, 1.0, 1.0);
+        I->rtol_set = d->opt.rtol;
+        I->atol_set = d->opt.atol;
+    }
+    state_changed = !I->have_end || d->t != I->t_end || memcmp(d->y, I->y_end, (size_t)m->ny * sizeof(double)) != 0;
+    if (state_changed) schedule_rows(m, d, 0);
+    if (state_changed || inputs_changed(m, d, I) || I->restart_pending) {
+        restart(d, I);
+        I->restart_pending = 0;
+        need = 1;
+    }
+    if (!I->fsal) need = 1; /* outputs may be stale (e.g. a cd_forward on another state) */
+    return need;
+}
+
+static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
+                         cd_error *err)
 {
     cd_integ *I = (cd_integ *)d->integ;
     long attempts = 0;
-    int changed, need_settle = 1;
+    int changed, need_settle;
     cd_status st;
     if (!(t_end >= d->t) || !isfinite(t_end)) {
         seterr(err, CD_EINVAL, "t_end must be finite and not before the current time", d->t);
         return CD_EINVAL;
     }
+    need_settle = begin_call(m, d, I, &st, err);
+    if (st != CD_OK) return st;
     while (d->t < t_end) {
-        double t0 = d->t, t1 = t_end, tdw, g1;
-        int status, at_dwell_end;
-        /* modes are re-checked on entry (the caller may have edited y) and
-         * where a dwell expired; after an ordinary step the end-of-step
-         * evaluation below has already shown them consistent */
+        double t0 = d->t, t1 = t_end, tdw, tbr, g1;
+        int status, at_dwell_end, at_break;
+        /* a schedule breakpoint reached: new rows, restart, re-check the modes */
+        if (schedule_rows(m, d, 1)) { restart(d, I); need_settle = 1; }
+        /* modes are re-checked on entry (the caller may have edited y or the
+         * inputs), at breakpoints and where a dwell expired; after an
+         * ordinary step the end-of-step evaluation has already shown them consistent */
         if (need_settle) {
             st = settle_modes(m, d, I, &changed);
             if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
             need_settle = 0;
             if (changed) {
-                if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
+                restart(d, I);
+                I->fsal = 1;
                 if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
+                if (inputs_changed(m, d, I)) { restart(d, I); need_settle = 1; inputs_get(m, d, I->in_snap); continue; }
             }
         }
-        tdw = next_dwell_end(m, d, I);
+        tdw = next_dwell_end(m, d);
         at_dwell_end = tdw <= t1;
         if (at_dwell_end) t1 = tdw;
+        tbr = next_break(m, t0);
+        at_break = tbr <= t1;
+        if (at_break) { t1 = tbr; at_dwell_end = at_dwell_end && tdw == tbr; }
         memcpy(I->y0, d->y, (size_t)m->ny * sizeof(double));
         if (I->fixed) {
             double h = I->h < t1 - t0 ? I->h : t1 - t0;
-            status = one_step(I, t0, h, d->y);
+            status = rk4_step(I, t0, h, d->y, I->fsal);
             if (status == GSL_SUCCESS) d->t = (t1 - t0 <= I->h) ? t1 : t0 + h;
             attempts++;
         } else {
-            double t = t0, hmax = m->opt.h_max;
+            double t = t0, hmax = d->opt.h_max;
             long before = (long)I->drv->e->failed_steps;
             if (hmax > 0 && I->h > hmax) I->h = hmax;
             /* a step that would end within round-off of t1 would leave a sliver
@@ -498,6 +613,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             attempts += 1 + (long)I->drv->e->failed_steps - before;
             if (status == GSL_SUCCESS) d->t = t;
         }
+        I->fsal = 0;
         if (status != GSL_SUCCESS) {
             restore_start(m, d, I, t0, d->y);
             if (status == GSL_EBADFUNC) {
@@ -507,7 +623,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             seterr(err, CD_ESTALL, "integrator step failed", t0);
             return CD_ESTALL;
         }
-        renormalize(m, d);
+        clean_state(m, d);
         d->stats.nsteps++;
         d->stats.h_last = d->t - t0;
         if (d->stats.h_last < d->stats.h_min_seen && d->t < t1) d->stats.h_min_seen = d->stats.h_last;
@@ -520,34 +636,135 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             seterr(err, CD_ENUMERIC, "non-finite state after a step", t0);
             return CD_ENUMERIC;
         }
-        g1 = gmin(m, d, I, 1, NULL);
+        I->fsal = 1;
+        g1 = gmin(m, d, 1, NULL);
         if (at_dwell_end && d->t == t1) need_settle = 1;
         if (g1 < 0) {
             int trig = -1;
+            I->fsal = 0;
             st = locate(m, d, I, t0, d->t, g1, &trig);
             if (st != CD_OK) { seterr(err, st, "event location failed", t0); return st; }
-            renormalize(m, d);
-            /* the slot that crossed switches unconditionally (it is on the new side) */
-            if (trig >= 0) (void)counted_switch(m, d, I, trig / 2, 0);
+            clean_state(m, d);
+            /* the unit that crossed switches unconditionally (it is on the new side) */
+            if (trig >= 0) (void)counted_switch(m, d, trig, 0);
             st = settle_modes(m, d, I, &changed);
             if (st != CD_OK) { seterr(err, st, "non-finite state at an event", d->t); return st; }
-            if (I->drv) { gsl_odeiv2_evolve_reset(I->drv->e); gsl_odeiv2_step_reset(I->drv->s); }
+            restart(d, I);
+            I->fsal = 1;
         }
         /* geometry failures are reported, never silent */
         {
             int k;
             for (k = 0; k < m->nslot; k++)
-                if (d->slot_geomfail[k]) { d->stats.nwarn_geom++; log_event(m, d, k, CD_EV_GEOM_FAIL, d->slot_mode[k], d->slot_mode[k]); }
+                if (d->slot_geomfail[k]) {
+                    cd_event ev;
+                    memset(&ev, 0, sizeof ev);
+                    ev.kind = CD_EV_GEOM_FAIL;
+                    ev.owner_kind = CD_OWNER_SLOT;
+                    ev.owner = ev.slot = k;
+                    ev.body_a = m->cp_body[m->slot_cp[k]];
+                    ev.body_b = m->shape_body[m->slot_shape[k]];
+                    ev.mode_from = ev.mode_to = d->slot_mode[k];
+                    d->stats.nwarn_geom++;
+                    log_event(d, &ev);
+                }
         }
-        if (!I->fixed && I->h < m->opt.h_min && d->t < t_end) {
+        if (!I->fixed && I->h < d->opt.h_min && d->t < t_end) {
             seterr(err, CD_ESTALL, "step size fell below h_min (stiff or discontinuous dynamics)", d->t);
             return CD_ESTALL;
         }
-        if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
-        if (attempts >= m->opt.max_steps) {
+        if (cb) {
+            inputs_get(m, d, I->in_snap);
+            if (cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
+            /* inputs written by the callback take effect from this instant */
+            if (inputs_changed(m, d, I)) { restart(d, I); need_settle = 1; }
+        }
+        if (attempts >= d->opt.max_steps) {
             seterr(err, CD_EMAXSTEPS, "step budget (max_steps) exhausted", d->t);
             return CD_EMAXSTEPS;
         }
+        if (d->opt.max_evals > 0 && d->stats.nrhs - I->nrhs0 >= d->opt.max_evals && d->t < t_end) {
+            seterr(err, CD_EBUDGET, "evaluation budget (max_evals) of this call spent", d->t);
+            return CD_EBUDGET;
+        }
     }
+    /* a schedule row that starts exactly at t_end belongs to the next call */
     return CD_OK;
+}
+
+cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
+                         cd_error *err)
+{
+    cd_integ *I = (cd_integ *)d->integ;
+    cd_status st = advance(m, d, t_end, cb, user, err);
+    remember_end(m, d, I);
+    I->m = NULL;
+    return st;
+}
+
+cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
+{
+    cd_integ *I = (cd_integ *)d->integ;
+    double t_target, hsave = I->h;
+    cd_status st;
+    if (!(h > 0) || !isfinite(h)) {
+        cd_error_set(err, CD_EINVAL, "cd_step: h must be positive and finite, got %g", h);
+        return CD_EINVAL;
+    }
+    if (I->fixed && d->opt.max_evals > 0 && d->opt.max_evals < 4 + CD_BUDGET_RESERVE) {
+        cd_error_set(err, CD_EBUDGET, "cd_step: max_evals %ld cannot cover one RK4 step and its event reserve (%d)",
+                     d->opt.max_evals, 4 + CD_BUDGET_RESERVE);
+        return CD_EBUDGET;
+    }
+    /* the time grid: a new origin where h changes or the caller moved t */
+    if (h != I->step_h || !I->have_end || d->t != I->step_t0 + (double)I->step_k * I->step_h) {
+        I->step_t0 = d->t;
+        I->step_h = h;
+        I->step_k = 0;
+    }
+    t_target = I->step_t0 + (double)(I->step_k + 1) * h;
+    if (I->fixed) I->h = t_target - d->t;
+    st = advance(m, d, t_target, NULL, NULL, err);
+    if (I->fixed) I->h = hsave;
+    if (st == CD_OK) I->step_k++;
+    remember_end(m, d, I);
+    I->m = NULL;
+    return st;
+}
+
+/* ---- the integrator's part of the complete state ------------------------------ */
+#define INTEG_FIXED_WORDS 10
+
+int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody; }
+
+void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
+{
+    cd_integ *I = (cd_integ *)d->integ;
+    /* a stepper with a history inside GSL restarts here, in this run as in
+     * any run restored from this snapshot */
+    if (I->history) I->restart_pending = 1;
+    b[0] = I->h; b[1] = I->t_end; b[2] = I->step_t0; b[3] = I->step_h; b[4] = (double)I->step_k;
+    b[5] = I->have_end; b[6] = I->fsal; b[7] = I->restart_pending; b[8] = I->rtol_set; b[9] = I->atol_set;
+    memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
+    memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)(m->nu + m->nv + 12 * m->nbody) * sizeof(double));
+}
+
+void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
+{
+    cd_integ *I = (cd_integ *)d->integ;
+    I->h = b[0]; I->t_end = b[1]; I->step_t0 = b[2]; I->step_h = b[3]; I->step_k = (long)b[4];
+    I->have_end = (int)b[5]; I->fsal = (int)b[6]; I->restart_pending = (int)b[7];
+    memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
+    memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)(m->nu + m->nv + 12 * m->nbody) * sizeof(double));
+    /* the GSL stepper: explicit ones keep nothing between steps but h; a
+     * history stepper restarts (restart_pending is set in its snapshots) */
+    if (I->drv) {
+        gsl_odeiv2_evolve_reset(I->drv->e);
+        gsl_odeiv2_step_reset(I->drv->s);
+        if (b[8] != I->rtol_set || b[9] != I->atol_set) {
+            gsl_odeiv2_control_init(I->drv->c, b[9], b[8], 1.0, 1.0);
+            I->rtol_set = b[8];
+            I->atol_set = b[9];
+        }
+    }
 }

@@ -1,0 +1,68 @@
+/* The state layout of cd_data: views of each system's block of y, joint
+ * coordinates, and the event log and names. Below kinematics, dynamics,
+ * contact and the integrator: knows where things are, not what they do. */
+#include "capdyn/data.h"
+
+#include <math.h>
+
+static const char *ev_names[CD_EV_NKINDS] = {
+    "onset", "separation", "stick_slip", "slip_stick", "slip_turn", "geometry_failure",
+    "limit_engage", "limit_release", "user", "schedule"};
+static const char *owner_names[CD_OWNER_NKINDS] = {"slot", "joint", "actuator", "user"};
+static const char *mode_names[3] = {"open", "stick", "slip"};
+
+const char *cd_event_kind_name(cd_event_kind k)
+{ return (k >= 0 && k < CD_EV_NKINDS) ? ev_names[k] : "?"; }
+const char *cd_owner_kind_name(cd_owner_kind k)
+{ return (k >= 0 && k < CD_OWNER_NKINDS) ? owner_names[k] : "?"; }
+const char *cd_slot_mode_name(cd_slot_mode mo)
+{ return (mo >= 0 && mo <= CD_MODE_SLIP) ? mode_names[mo] : "?"; }
+
+const cd_event *cd_data_event(const cd_data *d, long i)
+{
+    long held = d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap;
+    long first = d->ev_count - held;
+    if (i < 0 || i >= held) return NULL;
+    return &d->ev[(first + i) % d->ev_cap];
+}
+
+/* offsets of a system's parts inside y */
+static void sys_layout(const cd_model *m, int s, int *pos, int *q, int *vel, int *qd)
+{
+    int a = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1;
+    if (m->sys_base_type[s] == CD_BASE_FREE) {
+        *pos = a; *q = a + 7; *vel = a + 7 + nj; *qd = a + 7 + nj + 6;
+    } else {
+        *pos = -1; *q = a; *vel = -1; *qd = a + nj;
+    }
+}
+
+cd_sys_state cd_state_of(const cd_model *m, const cd_data *d, int s)
+{
+    cd_sys_state r;
+    int pos, q, vel, qd;
+    sys_layout(m, s, &pos, &q, &vel, &qd);
+    r.njoint = m->sys_nbody[s] - 1;
+    r.pos = pos >= 0 ? d->y + pos : NULL;
+    r.quat = pos >= 0 ? d->y + pos + 3 : NULL;
+    r.vel = vel >= 0 ? d->y + vel : NULL;
+    r.angvel = vel >= 0 ? d->y + vel + 3 : NULL;
+    r.q = d->y + q;
+    r.qd = d->y + qd;
+    return r;
+}
+
+double cd_joint_q(const cd_model *m, const cd_data *d, int b)
+{
+    int s = m->body_sys[b];
+    if (m->body_parent[b] < 0) return 0.0;
+    return cd_state_of(m, d, s).q[b - m->sys_body_adr[s] - 1];
+}
+
+double cd_joint_qd(const cd_model *m, const cd_data *d, int b)
+{
+    int s = m->body_sys[b];
+    if (m->body_parent[b] < 0) return 0.0;
+    return cd_state_of(m, d, s).qd[b - m->sys_body_adr[s] - 1];
+}
+
