@@ -142,7 +142,7 @@ cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
                 if (work[j] > cmax) cmax = work[j];
             }
             np = 0;
-            for (j = 0; j < n; j++) { part[j] = work[j] > 1e-9 * cmax && cmax > 0; np += part[j]; }
+            for (j = 0; j < n; j++) { part[j] = work[j] > 1e-13 * cmax && cmax > 0; np += part[j]; }
             if (np == 0) goto out;
         }
         res = 0;
@@ -170,10 +170,30 @@ cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
             st = CD_ENUMERIC;
             goto out;
         }
-        for (i = n - 1, ii = np - 1; i >= 0; i--)
-            if (part[i]) delta[i] += dx[ii--];
-        if ((st = residual(m, d, &c, delta, r)) != CD_OK) goto out;
+        /* backtracking: a law with p_t > 1 has no tangential stiffness at zero
+         * deflection, so the first Newton steps can overshoot by far */
+        {
+            double res_new = HUGE_VAL, lam = 1.0;
+            int ls;
+            memcpy(r1, delta, (size_t)n * sizeof(double));
+            for (ls = 0; ls < 60; ls++, lam *= 0.5) {
+                for (i = n - 1, ii = np - 1; i >= 0; i--)
+                    if (part[i]) delta[i] = r1[i] + lam * dx[ii--];
+                if (residual(m, d, &c, delta, r) != CD_OK) continue;
+                res_new = 0;
+                for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res_new) res_new = fabs(r[i]);
+                if (res_new < res) break;
+            }
+            if (!(res_new < res)) { /* no progress: round-off floor reached */
+                memcpy(delta, r1, (size_t)n * sizeof(double));
+                if ((st = residual(m, d, &c, delta, r)) != CD_OK) goto out;
+                break;
+            }
+        }
     }
+    res = 0;
+    for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res) res = fabs(r[i]);
+    d->stats.eq_residual = res;
     if (!(res <= 1e-9 * scale)) {
         cd_error_set(err, CD_ENUMERIC,
                      "equilibrium start: no static equilibrium near the initial pose (largest acceleration left %g, "
