@@ -699,6 +699,28 @@ struct Tab {
     }
 };
 
+bool bool_of(const Node &n, const std::string &path)
+{
+    if (n.kind != NK::Bool) fail_at(n.loc, path, "expected true or false, got " + render(n));
+    return n.bval;
+}
+
+/* rows [[t, v], ...] with strictly increasing t */
+void rows_of(const Node &tb, const std::string &p, const char *what, std::vector<double> &tt, std::vector<double> &tv)
+{
+    if (tb.kind != NK::Array || tb.arr.empty())
+        fail_at(tb.loc, p, std::string("expected a non-empty array of ") + what + " rows, got " + render(tb));
+    for (size_t i = 0; i < tb.arr.size(); i++) {
+        double r[2];
+        vec_of(*tb.arr[i], idx(p, i), 2, r, Range::Any, (std::string("a row ") + what).c_str());
+        if (i > 0 && !(r[0] > tt.back()))
+            fail_at(tb.arr[i]->loc, idx(p, i),
+                    "expected times strictly increasing, got t = " + fmt_num(r[0]) + " after t = " + fmt_num(tt.back()));
+        tt.push_back(r[0]);
+        tv.push_back(r[1]);
+    }
+}
+
 /* A child table (value must be a table). */
 Node *table_of(Node &n, const std::string &path)
 {
@@ -851,7 +873,7 @@ struct LawState {
     bool kt_set = false, dt_set = false, mu_set = false;
 };
 
-const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "mu_max", "mu", "rule"};
+const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "p_t", "q_t", "mu_max", "mu", "rule", "pull"};
 
 struct Builder {
     std::unique_ptr<cd_model, ModelDel> m;
@@ -966,17 +988,21 @@ struct Builder {
             shape(*list[i], e->val->kind == NK::Array ? idx(p, i) : p, s, body, nullptr);
     }
 
-    void actuator(Node &node, const std::string &path, int body, bool revolute)
+    /* The law keys of an actuator table (shared by a link's `actuator` and the
+     * top-level [[actuator]] with a transmission): fills a, with the table
+     * rows in tt/tv; `extra` are the keys the caller handles. */
+    void actuator_law(Node &node, bool revolute, const std::vector<std::string> &extra,
+                      cd_actuator_desc &a, std::vector<double> &tt, std::vector<double> &tv, Tab &t)
     {
-        Tab t(table_of(node, path), path, {"type", "tau", "table", "kp", "kd", "qref_deg", "qref", "tau0"});
-        std::vector<std::string> types = {"none", "constant", "table", "pd"};
+        std::vector<std::string> types = {"none", "constant", "table", "steps", "pd"};
         std::string ty = choice_of(t.need("type", "one of " + list(types)), t.kp("type"), types);
         std::vector<std::string> takes;
         if (ty == "constant") takes = {"tau"};
-        else if (ty == "table") takes = {"table"};
+        else if (ty == "table" || ty == "steps") takes = {"table"};
         else if (ty == "pd") takes = {"kp", "kd", revolute ? "qref_deg" : "qref", "tau0"};
         for (auto &e : node.tab) {
-            if (e.key == "type") continue;
+            if (e.key == "type" || e.key == "motor") continue;
+            if (std::find(extra.begin(), extra.end(), e.key) != extra.end()) continue;
             if (std::find(takes.begin(), takes.end(), e.key) != takes.end()) continue;
             if (ty == "pd" && (e.key == "qref" || e.key == "qref_deg"))
                 fail_at(e.kloc, t.kp(e.key.c_str()),
@@ -986,29 +1012,14 @@ struct Builder {
                     "does not apply to a '" + ty + "' actuator" +
                         (takes.empty() ? std::string(" (it takes no parameters)") : " (it takes: " + list(takes) + ")"));
         }
-        cd_actuator a;
-        std::memset(&a, 0, sizeof a);
-        std::vector<double> tt, tv;
         if (ty == "none") {
             a.type = CD_ACT_NONE;
         } else if (ty == "constant") {
             a.type = CD_ACT_CONSTANT;
             a.tau0 = t.need_num("tau", Range::Any);
-        } else if (ty == "table") {
-            a.type = CD_ACT_TABLE;
-            const Node &tb = t.need("table", "an array of [t, tau] rows");
-            std::string p = t.kp("table");
-            if (tb.kind != NK::Array || tb.arr.empty())
-                fail_at(tb.loc, p, "expected a non-empty array of [t, tau] rows, got " + render(tb));
-            for (size_t i = 0; i < tb.arr.size(); i++) {
-                double r[2];
-                vec_of(*tb.arr[i], idx(p, i), 2, r, Range::Any, "a row [t, tau]");
-                if (i > 0 && !(r[0] > tt.back()))
-                    fail_at(tb.arr[i]->loc, idx(p, i),
-                            "expected times strictly increasing, got t = " + fmt_num(r[0]) + " after t = " + fmt_num(tt.back()));
-                tt.push_back(r[0]);
-                tv.push_back(r[1]);
-            }
+        } else if (ty == "table" || ty == "steps") {
+            a.type = ty == "table" ? CD_ACT_TABLE : CD_ACT_STEPS;
+            rows_of(t.need("table", "an array of [t, tau] rows"), t.kp("table"), "[t, tau]", tt, tv);
             a.tbl_t = tt.data();
             a.tbl_v = tv.data();
             a.ntbl = (int)tt.size();
@@ -1019,14 +1030,148 @@ struct Builder {
             a.qref = revolute ? t.num("qref_deg", 0.0, Range::Any) * DEG : t.num("qref", 0.0, Range::Any);
             a.tau0 = t.num("tau0", 0.0, Range::Any);
         }
-        if (cd_model_set_actuator(m.get(), body, &a, &err) != CD_OK) builder_fail(node.loc, path);
+        if (Entry *e = t.get("motor")) {
+            std::string mp = t.kp("motor");
+            Tab mt(table_of(*e->val, mp), mp, {"stall_torque", "noload_speed"});
+            a.stall_torque = mt.need_num("stall_torque", Range::Pos);
+            a.noload_speed = mt.need_num("noload_speed", Range::Pos);
+        }
+    }
+
+    void actuator(Node &node, const std::string &path, int body, bool revolute)
+    {
+        static const std::vector<std::string> keys = {"type", "tau", "table", "kp", "kd", "qref_deg", "qref", "tau0", "motor"};
+        Tab t(table_of(node, path), path, keys);
+        cd_actuator_desc a = cd_actuator_desc_default();
+        std::vector<double> tt, tv;
+        double one = 1.0;
+        actuator_law(node, revolute, {}, a, tt, tv, t);
+        a.name = m->body_name[body];
+        a.ntrn = 1;
+        a.trn_body = &body;
+        a.trn_ratio = &one;
+        int id = cd_model_add_actuator(m.get(), &a, &err);
+        if (id < 0) builder_fail(node.loc, path);
+        m->body_act[body] = id;
+    }
+
+    /* [[actuator]]: one motor driving several joints (a transmission) */
+    void transmission_actuator(Node &node, const std::string &path)
+    {
+        static const std::vector<std::string> keys = {"name", "type", "tau", "table", "kp", "kd", "qref_deg", "qref",
+                                                      "tau0", "motor", "joints", "ratios"};
+        Tab t(table_of(node, path), path, keys);
+        cd_actuator_desc a = cd_actuator_desc_default();
+        std::vector<double> tt, tv, ratios;
+        std::vector<int> bodies;
+        std::string name = name_of_node(t.need("name", "a name"), t.kp("name"));
+        if (cd_model_actuator_id(m.get(), name.c_str()) >= 0)
+            fail_at(t.get("name")->val->loc, t.kp("name"), "expected an actuator name used once, got '" + name + "' twice");
+        const Node &jn = t.need("joints", "an array of \"system/link\" names");
+        std::string jp = t.kp("joints");
+        if (jn.kind != NK::Array || jn.arr.empty())
+            fail_at(jn.loc, jp, "expected a non-empty array of \"system/link\" names, got " + render(jn));
+        bool rev = true;
+        for (size_t i = 0; i < jn.arr.size(); i++) {
+            std::string jname = str_of(*jn.arr[i], idx(jp, i));
+            int b = cd_model_body_id(m.get(), jname.c_str());
+            if (b < 0 || m->body_parent[b] < 0)
+                fail_at(jn.arr[i]->loc, idx(jp, i), "expected the name of a joint (\"system/link\"), got '" + jname + "'");
+            for (int o : bodies)
+                if (o == b) fail_at(jn.arr[i]->loc, idx(jp, i), "expected each joint once, got '" + jname + "' twice");
+            if (m->body_jnt_type[b] != CD_JOINT_REVOLUTE) rev = false;
+            bodies.push_back(b);
+        }
+        if (Entry *e = t.get("ratios")) {
+            const Node &rn = *e->val;
+            if (rn.kind != NK::Array || rn.arr.size() != bodies.size())
+                fail_at(rn.loc, t.kp("ratios"), "expected " + std::to_string(bodies.size()) + " ratios (one per joint), got " + render(rn));
+            for (size_t i = 0; i < rn.arr.size(); i++) ratios.push_back(num_of(*rn.arr[i], idx(t.kp("ratios"), i), Range::Any));
+        } else {
+            ratios.assign(bodies.size(), 1.0);
+        }
+        actuator_law(node, rev, {"name", "joints", "ratios"}, a, tt, tv, t);
+        a.name = name.c_str();
+        a.ntrn = (int)bodies.size();
+        a.trn_body = bodies.data();
+        a.trn_ratio = ratios.data();
+        if (cd_model_add_actuator(m.get(), &a, &err) < 0) builder_fail(node.loc, path);
+    }
+
+    /* a link's passive elements, stop law and prescribed motion */
+    void joint_props(const Tab &t, int id, bool rev, const double *lim, double q0)
+    {
+        cd_joint_props p = cd_joint_props_default();
+        bool any = false;
+        double sc = rev ? DEG : 1.0;
+        if (lim) {
+            p.limited = 1;
+            p.lower = lim[0] * sc;
+            p.upper = lim[1] * sc;
+            any = true;
+        }
+        if (Entry *e = t.get("stop")) {
+            std::string sp = t.kp("stop");
+            if (!lim) fail_at(e->kloc, sp, std::string("a stop needs the joint's ") + (rev ? "limit_deg" : "limit"));
+            Tab st(table_of(*e->val, sp), sp, {"K", "D", "p", "q"});
+            p.stop_K = st.num("K", 0.0, Range::Pos);
+            p.stop_D = st.num("D", 0.0, Range::NonNeg);
+            p.stop_p = st.num("p", 0.0, Range::Ge1);
+            p.stop_q = st.num("q", 0.0, Range::Pos);
+        }
+        if (Entry *e = t.get("spring")) {
+            std::string sp = t.kp("spring");
+            Tab st(table_of(*e->val, sp), sp, {"stiffness", rev ? "rest_deg" : "rest"});
+            p.stiffness = st.need_num("stiffness", Range::NonNeg);
+            p.rest = st.num(rev ? "rest_deg" : "rest", 0.0, Range::Any) * sc;
+            any = true;
+        }
+        if (Entry *e = t.get("damping")) {
+            p.damping = num_of(*e->val, t.kp("damping"), Range::NonNeg);
+            any = true;
+        }
+        if (Entry *e = t.get("friction")) {
+            std::string fp = t.kp("friction");
+            Tab ft(table_of(*e->val, fp), fp, {"torque", "stiffness", "damping"});
+            p.friction = ft.need_num("torque", Range::Pos);
+            p.friction_k = ft.num("stiffness", 0.0, Range::Pos);
+            p.friction_d = ft.num("damping", 0.0, Range::NonNeg);
+            any = true;
+        }
+        std::vector<double> pt, pq;
+        if (Entry *e = t.get("prescribed")) {
+            std::string pp = t.kp("prescribed");
+            const char *vk = rev ? "rate_deg_s" : "rate", *qk = rev ? "waypoints_deg" : "waypoints";
+            Tab ptab(table_of(*e->val, pp), pp, {"type", vk, "start", qk});
+            std::string ty = choice_of(ptab.need("type", "'velocity' or 'waypoints'"), ptab.kp("type"), {"velocity", "waypoints"});
+            if (ty == "velocity") {
+                if (ptab.get(qk)) fail_at(ptab.get(qk)->kloc, ptab.kp(qk), "does not apply to a 'velocity' profile");
+                p.prescribe = CD_PRESCRIBE_VELOCITY;
+                p.presc_v = ptab.need_num(vk, Range::Any) * sc;
+                p.presc_t0 = ptab.num("start", 0.0, Range::NonNeg);
+            } else {
+                if (ptab.get(vk)) fail_at(ptab.get(vk)->kloc, ptab.kp(vk), "does not apply to a 'waypoints' profile");
+                if (ptab.get("start")) fail_at(ptab.get("start")->kloc, ptab.kp("start"), "does not apply to a 'waypoints' profile");
+                rows_of(ptab.need(qk, rev ? "an array of [t, q_deg] rows" : "an array of [t, q] rows"), ptab.kp(qk),
+                        rev ? "[t, q_deg]" : "[t, q]", pt, pq);
+                for (double &v : pq) v *= sc;
+                p.prescribe = CD_PRESCRIBE_WAYPOINTS;
+                p.presc_t = pt.data();
+                p.presc_q = pq.data();
+                p.npresc = (int)pt.size();
+            }
+            any = true;
+        }
+        (void)q0;
+        if (any && cd_model_set_joint(m.get(), id, &p, &err) != CD_OK) builder_fail(t.n->loc, t.path);
     }
 
     void link(Node &node, const std::string &path, SysInfo &s)
     {
         Tab t(&node, path,
               {"name", "parent", "joint", "axis", "origin", "rpy_deg", "quaternion", "mass", "com", "inertia",
-               "limit_deg", "limit", "q0_deg", "q0", "qd0_deg_s", "qd0", "checkpoints", "shape", "actuator"});
+               "limit_deg", "limit", "q0_deg", "q0", "qd0_deg_s", "qd0", "checkpoints", "shape", "actuator",
+               "stop", "spring", "damping", "friction", "prescribed"});
         std::string name = name_of_node(t.need("name", "a name"), t.kp("name"));
         if (name == "base")
             fail_at(t.get("name")->val->loc, t.kp("name"), "expected a link name other than 'base' (reserved for the base body)");
@@ -1082,8 +1227,10 @@ struct Builder {
         double q0u = t.num(q0k, 0.0, Range::Any);
         d.q0 = q0u * sc;
         d.qd0 = t.num(qd0k, 0.0, Range::Any) * sc;
+        double lim[2];
+        bool has_lim = false;
         if (Entry *e = t.get(limk)) {
-            double lim[2];
+            has_lim = true;
             vec_of(*e->val, t.kp(limk), 2, lim, Range::Any, "an array [lower, upper]");
             if (!(lim[0] < lim[1]))
                 fail_at(e->val->loc, t.kp(limk), "expected lower < upper, got " + render(*e->val));
@@ -1091,7 +1238,7 @@ struct Builder {
                 fail_at(t.get(q0k) ? t.get(q0k)->val->loc : e->val->loc, t.kp(q0k),
                         "expected an initial position within " + std::string(limk) + " " + render(*e->val) + ", got " +
                             fmt_num(q0u));
-            /* limits are accepted and checked against q0 but not enforced during a run (docs) */
+            /* enforced as compliant stops (joint_props) */
         }
         int id = cd_model_add_link(m.get(), s.id, &d, &err);
         if (id < 0) builder_fail(node.loc, path);
@@ -1099,6 +1246,7 @@ struct Builder {
         checkpoints(t, s.bodies.back());
         shapes(t, s, id);
         if (Entry *e = t.get("actuator")) actuator(*e->val, t.kp("actuator"), id, rev);
+        joint_props(t, id, rev, has_lim ? lim : nullptr, q0u);
     }
 
     /* [[system]] (is_target = false) or the [[target]] sugar */
@@ -1106,7 +1254,7 @@ struct Builder {
     {
         std::vector<std::string> keys = {"name",        "mass",     "inertia",          "position",
                                          "rpy_deg",     "quaternion", "velocity",       "angular_velocity",
-                                         "angular_velocity_deg_s", "checkpoints", "shape"};
+                                         "angular_velocity_deg_s", "checkpoints", "shape", "prescribed_motion"};
         if (!is_target) {
             keys.push_back("base");
             keys.push_back("link");
@@ -1154,6 +1302,11 @@ struct Builder {
         }
         s.id = cd_model_add_system(m.get(), &d, &err);
         if (s.id < 0) builder_fail(node.loc, path);
+        if (Entry *e = t.get("prescribed_motion")) {
+            if (fixed) fail_at(e->kloc, t.kp("prescribed_motion"), "applies only to a free base (this system has base = \"fixed\")");
+            if (bool_of(*e->val, t.kp("prescribed_motion")) && cd_model_prescribe_base(m.get(), s.id, d.vel, d.angvel, &err) != CD_OK)
+                builder_fail(e->val->loc, t.kp("prescribed_motion"));
+        }
         s.bodies.push_back(BodyInfo{"base", m->sys_body_adr[s.id], 0});
         sys.push_back(s);
         SysInfo &S = sys.back();
@@ -1196,6 +1349,9 @@ struct Builder {
         if (D) l.D = num_of(*D->val, t.kp("D"), Range::NonNeg);
         if (Entry *e = t.get("p")) l.p = num_of(*e->val, t.kp("p"), Range::Ge1);
         if (Entry *e = t.get("q")) l.q = num_of(*e->val, t.kp("q"), Range::Pos);
+        if (Entry *e = t.get("p_t")) l.pt = num_of(*e->val, t.kp("p_t"), Range::Ge1);
+        if (Entry *e = t.get("q_t")) l.qt = num_of(*e->val, t.kp("q_t"), Range::Pos);
+        if (Entry *e = t.get("pull")) l.pull = bool_of(*e->val, t.kp("pull")) ? 1 : 0;
         if (Entry *e = t.get("K_t")) { l.Kt = num_of(*e->val, t.kp("K_t"), Range::Pos); s.kt_set = true; }
         else if (!s.kt_set) l.Kt = l.K;
         if (Entry *e = t.get("D_t")) { l.Dt = num_of(*e->val, t.kp("D_t"), Range::NonNeg); s.dt_set = true; }
@@ -1298,7 +1454,7 @@ struct Builder {
     {
         m.reset(cd_model_create());
         if (!m) throw std::bad_alloc();
-        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper"});
+        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator"});
         if (Entry *e = top.get("include"))
             fail_at(e->kloc, "include", "expected 'include' only at the top of a file, got it from an override");
 
@@ -1314,7 +1470,8 @@ struct Builder {
             Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
             Tab t(&sn, "simulation",
                   {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
-                   "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity"});
+                   "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
+                   "equilibrium_start"});
             cd_options &o = m->opt;
             run.duration = t.need_num("duration", Range::Pos);
             t.vec("gravity", 3, m->gravity);
@@ -1339,6 +1496,7 @@ struct Builder {
             o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
             o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
             o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
+            if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
             run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
             /* the sample count must be a sane integer (the CLI converts it) */
             if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
@@ -1376,6 +1534,12 @@ struct Builder {
         if (te) {
             auto v = tables_of(*te->val, "target", "[[target]]");
             for (size_t i = 0; i < v.size(); i++) system(*v[i], te->val->kind == NK::Array ? idx("target", i) : "target", true);
+        }
+
+        /* [[actuator]]: transmissions (after every system: they name joints) */
+        if (Entry *e = top.get("actuator")) {
+            auto v = tables_of(*e->val, "actuator", "[[actuator]]");
+            for (size_t i = 0; i < v.size(); i++) transmission_actuator(*v[i], e->val->kind == NK::Array ? idx("actuator", i) : "actuator");
         }
 
         /* [gripper] */
