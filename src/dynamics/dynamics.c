@@ -12,6 +12,8 @@
  * moment arms small and needs no coordinate transforms between bodies. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "aba.h"
+#include "capdyn/dynamics.h"
 
 #include <string.h>
 
@@ -230,13 +232,20 @@ void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
     }
 }
 
-cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
+cd_status cd_forward_dynamics(const cd_model *m, cd_data *d) { return cd_forward_dynamics_method(m, d, CD_FD_AUTO); }
+
+/* ABA (aba.c) from CD_ABA_MIN_DOF on, measured crossover (docs/performance.md) */
+cd_status cd_forward_dynamics_method(const cd_model *m, cd_data *d, cd_fd_method method)
 {
     int s, i;
     for (s = 0; s < m->nsys; s++) {
         int n = m->sys_ndof[s], va = m->sys_v_adr[s];
         double *rhs = d->work + 12 * m->nbody, *zero = rhs + n;
         if (n == 0) continue;
+        if (method == CD_FD_ABA || (method == CD_FD_AUTO && n >= CD_ABA_MIN_DOF)) {
+            if (cd_aba_forward(m, d, s) != CD_OK) return CD_ENUMERIC;
+            continue;
+        }
         for (i = 0; i < n; i++) zero[i] = 0.0;
         cd_inverse_dynamics(m, d, s, zero, rhs); /* rhs = h - J^T F (bias) */
         for (i = 0; i < n; i++) rhs[i] = d->tau[va + i] - rhs[i];

@@ -3,6 +3,7 @@
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "integ.h"
+#include "../dynamics/aba.h"
 
 #include <stdio.h>
 #include <stdlib.h>
@@ -32,6 +33,14 @@ void cd_data_free(cd_data *d)
     free(d);
 }
 
+/* d->work: 12 nbody + 4 maxdof doubles for RNE/CRBA, at least
+ * CD_ABA_WORK_PER_BODY nbody for the articulated-body path (dynamics/aba.h) */
+static int work_size(int nb, int maxdof)
+{
+    int crba = 12 * nb + 4 * maxdof, aba = CD_ABA_WORK_PER_BODY * nb;
+    return crba > aba ? crba : aba;
+}
+
 cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
 {
     cd_data *d;
@@ -54,7 +63,7 @@ cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
     AL(body_v, 3 * nb); AL(body_axisw, 3 * nb); AL(body_V, 6 * nb); AL(body_S, 6 * nb);
     AL(sys_ref, 3 * m->nsys); AL(udot, m->nv + 1); AL(tau, m->nv + 1);
     AL(body_fext, 6 * nb); AL(body_fuser, 6 * nb);
-    AL(H, maxdof * maxdof); AL(work, 12 * nb + 4 * maxdof); AL(jwork, 12 * maxdof + 36);
+    AL(H, maxdof * maxdof); AL(work, work_size(nb, maxdof)); AL(jwork, 12 * maxdof + 36);
     AL(slot_mode, ns); AL(slot_dir, 3 * ns); AL(slot_va, 3 * ns); AL(slot_tswitch, ns); AL(slot_x, ns);
     AL(slot_xdot, ns); AL(slot_fn, ns); AL(slot_ft, 3 * ns); AL(slot_point, 3 * ns);
     AL(slot_normal, 3 * ns); AL(slot_vt, 3 * ns); AL(slot_fnraw, ns); AL(slot_geomfail, ns); AL(slot_held, ns);
