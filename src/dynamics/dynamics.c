@@ -4,9 +4,8 @@
  * Algorithm choice: the composite-rigid-body algorithm (CRBA) builds H in
  * O(n^2), a Cholesky factorisation solves it in O(n^3/6) (cd_math.h says why
  * not GSL's: it aborts through GSL's error handler on a singular H); the bias h comes from one RNE
- * pass. For the trees capdyn targets (a gripper: 4-12 joints; chaser + arm +
- * hand: <= ~30) this is faster than the articulated-body algorithm, whose
- * O(n) pays off only beyond that, and H is at hand for diagnostics. All
+ * pass. cd_forward_dynamics uses the articulated-body algorithm (aba.c) from
+ * CD_ABA_MIN_DOF on, measured faster at every size (aba.h); CRBA stays for H. All
  * spatial quantities are Plucker vectors in world axes about one reference
  * point per system, the current base position (SpaceDyn's R0), which keeps
  * moment arms small and needs no coordinate transforms between bodies. */
