@@ -1,7 +1,7 @@
 /* capdyn vs MuJoCo, side by side (issue 11; `make bench`, docs/performance.md).
  *
  *  1. Scenes, interleaved, R repetitions (default 5), each run in a fresh
- *     child process (fork) so that its peak resident memory is its own:
+ *     process (fork + exec) so that its peak resident memory is its own:
  *       grasp   scenarios/paper_fig5_envelope_grasp.toml (rtol 1e-6) and its
  *               twin bench/mjcf/fig5_grasp.xml: 2 s closing + 10 s hold;
  *               accuracy: object offset over the hold and creep rate
@@ -212,7 +212,21 @@ static void run_mujoco(int scene, run_result *r)
     mj_deleteModel(m);
 }
 
-/* one run in a child process; peak RSS from wait4 */
+/* One run in a fresh process: this program re-executed as
+ * `bench_speed --child ENGINE SCENE`, which writes its run_result to stdout
+ * (a pipe); a fresh exec (not a bare fork) so that the peak resident memory
+ * wait4 reports is the run's own, not the parent's. */
+static const char *self_path;
+
+static int child_main(int engine, int scene)
+{
+    run_result r;
+    memset(&r, 0, sizeof r);
+    if (engine == ENG_CAPDYN) run_capdyn(scene, &r);
+    else run_mujoco(scene, &r);
+    return fwrite(&r, sizeof r, 1, stdout) == 1 ? 0 : 1;
+}
+
 static run_result run_child(int engine, int scene, long *maxrss_kb)
 {
     run_result r;
@@ -224,22 +238,26 @@ static run_result run_child(int engine, int scene, long *maxrss_kb)
     fflush(NULL);
     pid = fork();
     if (pid == 0) {
-        ssize_t w;
+        char e[8], sc[8];
+        snprintf(e, sizeof e, "%d", engine);
+        snprintf(sc, sizeof sc, "%d", scene);
         close(fd[0]);
-        if (engine == ENG_CAPDYN) run_capdyn(scene, &r);
-        else run_mujoco(scene, &r);
-        w = write(fd[1], &r, sizeof r);
-        _exit(w == (ssize_t)sizeof r ? 0 : 1);
+        dup2(fd[1], STDOUT_FILENO);
+        close(fd[1]);
+        execl("/proc/self/exe", self_path, "--child", e, sc, (char *)NULL);
+        _exit(127);
     }
     close(fd[1]);
     if (pid < 0) { close(fd[0]); snprintf(r.msg, sizeof r.msg, "fork failed"); return r; }
     {
         struct rusage ru;
         int status;
-        ssize_t got = read(fd[0], &r, sizeof r);
+        size_t got = 0;
+        ssize_t k;
+        while (got < sizeof r && (k = read(fd[0], (char *)&r + got, sizeof r - got)) > 0) got += (size_t)k;
         close(fd[0]);
         wait4(pid, &status, 0, &ru);
-        if (got != (ssize_t)sizeof r) { memset(&r, 0, sizeof r); snprintf(r.msg, sizeof r.msg, "child died"); }
+        if (got != sizeof r) { memset(&r, 0, sizeof r); snprintf(r.msg, sizeof r.msg, "child died"); }
         *maxrss_kb = ru.ru_maxrss;
     }
     return r;
@@ -304,8 +322,9 @@ static int bench_scenes(int reps)
         1e3 * last[SC_GRASP][0].pos[0], 1e3 * last[SC_GRASP][0].pos[1], 1e3 * last[SC_GRASP][0].pos[2],
         1e3 * last[SC_GRASP][1].pos[0], 1e3 * last[SC_GRASP][1].pos[1], 1e3 * last[SC_GRASP][1].pos[2]);
     say("offset: grasp = |object(12 s) - object(2 s)| over the 10 s hold; incline = |block(10 s) - block(1 s)|;\n"
-        "rate: creep rate over the second half of that span (grasp 7-12 s, incline 5.5-10 s). ratio = capdyn RTF / MuJoCo RTF of the same repetition. peak RSS: the child\n"
-        "process (both libraries mapped); heap: model + data allocated by the engine.\n");
+        "rate: creep rate over the second half of that span (grasp 7-12 s, incline 5.5-10 s).\n"
+        "ratio = capdyn RTF / MuJoCo RTF of the same repetition. RSS: peak resident memory of the process\n"
+        "running one engine (both libraries mapped); heap: model + data allocated by the engine.\n");
     return 0;
 }
 
@@ -411,6 +430,8 @@ int main(int argc, char **argv)
     char host[256] = "?";
     time_t t = time(NULL);
     char date[64];
+    self_path = argv[0];
+    if (argc == 4 && !strcmp(argv[1], "--child")) return child_main(atoi(argv[2]), atoi(argv[3]));
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "-r") && i + 1 < argc) reps = atoi(argv[++i]);
         else if (!strcmp(argv[i], "-o") && i + 1 < argc) out = argv[++i];
