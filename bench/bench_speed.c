@@ -30,7 +30,6 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <sys/resource.h>
 #include <sys/time.h>
 #include <sys/types.h>
 #include <sys/wait.h>
@@ -103,6 +102,7 @@ typedef struct {
     double tsim;      /* simulated [s] */
     long steps, nrhs;
     long heap;        /* heap in use by the engine's model + data [B] */
+    long hwm_kb;      /* peak resident memory of the run's process (VmHWM) [kB] */
     double acc;       /* grasp: object offset over the hold; incline: drift [m] */
     double rate;      /* the same over the second half of that span, per second [m/s] */
     double pos[3];    /* final object / block position [m] */
@@ -215,8 +215,22 @@ static void run_mujoco(int scene, run_result *r)
 /* One run in a fresh process: this program re-executed as
  * `bench_speed --child ENGINE SCENE`, which writes its run_result to stdout
  * (a pipe); a fresh exec (not a bare fork) so that the peak resident memory
- * wait4 reports is the run's own, not the parent's. */
+ * it reports is the run's own, not the parent's. */
 static const char *self_path;
+
+/* peak resident set of this process [kB] (Linux VmHWM; starts afresh at exec,
+ * unlike getrusage's ru_maxrss, which keeps the pre-exec image's peak) */
+static long vm_hwm_kb(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    long kb = -1;
+    if (!f) return -1;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "VmHWM: %ld kB", &kb) == 1) break;
+    fclose(f);
+    return kb;
+}
 
 static int child_main(int engine, int scene)
 {
@@ -224,16 +238,16 @@ static int child_main(int engine, int scene)
     memset(&r, 0, sizeof r);
     if (engine == ENG_CAPDYN) run_capdyn(scene, &r);
     else run_mujoco(scene, &r);
+    r.hwm_kb = vm_hwm_kb();
     return fwrite(&r, sizeof r, 1, stdout) == 1 ? 0 : 1;
 }
 
-static run_result run_child(int engine, int scene, long *maxrss_kb)
+static run_result run_child(int engine, int scene)
 {
     run_result r;
     int fd[2];
     pid_t pid;
     memset(&r, 0, sizeof r);
-    *maxrss_kb = 0;
     if (pipe(fd) != 0) { snprintf(r.msg, sizeof r.msg, "pipe failed"); return r; }
     fflush(NULL);
     pid = fork();
@@ -250,15 +264,13 @@ static run_result run_child(int engine, int scene, long *maxrss_kb)
     close(fd[1]);
     if (pid < 0) { close(fd[0]); snprintf(r.msg, sizeof r.msg, "fork failed"); return r; }
     {
-        struct rusage ru;
         int status;
         size_t got = 0;
         ssize_t k;
         while (got < sizeof r && (k = read(fd[0], (char *)&r + got, sizeof r - got)) > 0) got += (size_t)k;
         close(fd[0]);
-        wait4(pid, &status, 0, &ru);
+        waitpid(pid, &status, 0);
         if (got != sizeof r) { memset(&r, 0, sizeof r); snprintf(r.msg, sizeof r.msg, "child died"); }
-        *maxrss_kb = ru.ru_maxrss;
     }
     return r;
 }
@@ -277,10 +289,9 @@ static int bench_scenes(int reps)
             int k;
             for (k = 0; k < 2; k++) {
                 /* alternate which engine goes first */
-                long kb;
                 run_result r;
                 eng = (rep + k) % 2;
-                r = run_child(eng, sc, &kb);
+                r = run_child(eng, sc);
                 if (!r.ok) {
                     fprintf(stderr, "bench_speed: %s %s failed: %s\n", eng ? "MuJoCo" : "capdyn", scene_name[sc], r.msg);
                     failed = 1;
@@ -291,7 +302,7 @@ static int bench_scenes(int reps)
                 acc[sc][eng][rep] = r.acc;
                 rate[sc][eng][rep] = r.rate;
                 last[sc][eng] = r;
-                if (kb > rss[sc][eng]) rss[sc][eng] = kb;
+                if (r.hwm_kb > rss[sc][eng]) rss[sc][eng] = r.hwm_kb;
             }
             ratio[sc][rep] = rtf[sc][ENG_CAPDYN][rep] / rtf[sc][ENG_MUJOCO][rep];
         }
@@ -408,16 +419,17 @@ static int bench_fd(int reps)
                 (med[FD_CRBA] < med[FD_ABA] ? med[FD_CRBA] : med[FD_ABA]) / med[FD_MJ], n ? c[FD_FIX_CRBA] : "-",
                 n ? c[FD_FIX_ABA] : "-");
         }
-        /* crossover: the smallest size from which ABA stays faster */
-        if (med[FD_ABA] < med[FD_CRBA]) { if (cross_free < 0) cross_free = n + 6; } else cross_free = -1;
+        /* crossover: the smallest size from which ABA stays faster, judged on
+         * the minima (the runs least disturbed by other load on the machine) */
+        if (mn[FD_ABA] < mn[FD_CRBA]) { if (cross_free < 0) cross_free = n + 6; } else cross_free = -1;
         if (n == 0) { /* a fixed base without joints has nothing to solve */
-        } else if (med[FD_FIX_ABA] < med[FD_FIX_CRBA]) { if (cross_fixed < 0) cross_fixed = n; } else cross_fixed = -1;
+        } else if (mn[FD_FIX_ABA] < mn[FD_FIX_CRBA]) { if (cross_fixed < 0) cross_fixed = n; } else cross_fixed = -1;
         mj_deleteData(md);
         mj_deleteModel(mm);
         cd_data_free(df); cd_data_free(dx);
         cd_model_free(mf); cd_model_free(mx);
     }
-    say("measured crossover (ABA median faster from here on): free base %d DoF, fixed base %d DoF; "
+    say("measured crossover (ABA minimum faster from here on): free base %d DoF, fixed base %d DoF; "
         "cd_forward_dynamics switches at %d DoF (cd_fd_aba_min_dof)\n", cross_free, cross_fixed, cd_fd_aba_min_dof());
     say("best/MJ = min(capdyn CRBA, capdyn ABA) / MuJoCo (< 1: capdyn faster)\n");
     return 0;
