@@ -33,7 +33,7 @@ CLI      = $(BUILD)/capdyn
 TESTBIN  = $(BUILD)/capdyn_tests
 JOBS    ?= 2
 
-.PHONY: all deps lib cli test asan bench demo figures clean help check-deps
+.PHONY: all deps lib cli test asan bench demo figures clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI)
 
@@ -45,6 +45,8 @@ help:
 	@echo "make bench    benchmarks (bench/)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
+	@echo "make install PREFIX=/usr/local   static libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
+	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
 deps:
 	@bash scripts/install-deps.sh
@@ -87,6 +89,7 @@ cli: $(CLI)
 test: deps
 	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI)
 	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	@$(MAKE) --no-print-directory install-check
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \
@@ -95,6 +98,41 @@ asan: deps
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 build-asan/capdyn_tests --jobs $(JOBS) $(TEST_ARGS)
 
 -include bench/bench.mk
+
+# ---- install (docs/performance.md "Installing"; tests/install_check.sh) ----
+# Static libraries, public headers, pkg-config files and the CLI under
+# $(DESTDIR)$(PREFIX). Embedders link with `pkg-config --static --libs capdyn`
+# (core) or `capdyn-io` (core + scenarios + HDF5).
+PREFIX  ?= /usr/local
+LIBDIR  ?= $(PREFIX)/lib
+INCDIR  ?= $(PREFIX)/include
+BINDIR  ?= $(PREFIX)/bin
+PCDIR   ?= $(LIBDIR)/pkgconfig
+VERSION := $(shell sed -n 's/^\#define CD_VERSION_STRING "\(.*\)"/\1/p' include/capdyn/model.h)
+PUB_HEADERS = $(wildcard include/capdyn/*.h)
+PC_FILES = capdyn.pc capdyn-io.pc
+# installs into a temporary prefix, builds and runs the embedding programs
+# against the installed copy only (add examples here as they come)
+INSTALL_CHECK_SRC ?= tests/embed/embed_core.c tests/embed/embed_io.c
+
+install: check-deps $(LIB) $(LIB_IO) $(CLI)
+	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/capdyn $(DESTDIR)$(PCDIR) $(DESTDIR)$(BINDIR)
+	install -m 644 $(LIB) $(LIB_IO) $(DESTDIR)$(LIBDIR)/
+	install -m 644 $(PUB_HEADERS) $(DESTDIR)$(INCDIR)/capdyn/
+	install -m 755 $(CLI) $(DESTDIR)$(BINDIR)/
+	for pc in $(PC_FILES); do \
+	  sed -e 's|@PREFIX@|$(PREFIX)|g' -e 's|@LIBDIR@|$(LIBDIR)|g' -e 's|@INCLUDEDIR@|$(INCDIR)|g' \
+	      -e 's|@VERSION@|$(VERSION)|g' pkgconfig/$$pc.in > $(DESTDIR)$(PCDIR)/$$pc || exit 1; \
+	done
+
+uninstall:
+	rm -f $(DESTDIR)$(LIBDIR)/$(notdir $(LIB)) $(DESTDIR)$(LIBDIR)/$(notdir $(LIB_IO))
+	rm -f $(addprefix $(DESTDIR)$(INCDIR)/capdyn/,$(notdir $(PUB_HEADERS)))
+	rm -f $(addprefix $(DESTDIR)$(PCDIR)/,$(PC_FILES)) $(DESTDIR)$(BINDIR)/$(notdir $(CLI))
+	-rmdir $(DESTDIR)$(INCDIR)/capdyn 2>/dev/null
+
+install-check: $(LIB) $(LIB_IO) $(CLI)
+	@BUILD=$(BUILD) MAKE="$(MAKE)" bash tests/install_check.sh $(INSTALL_CHECK_SRC)
 
 demo: deps
 	@$(MAKE) --no-print-directory $(CLI)

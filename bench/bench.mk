@@ -1,11 +1,30 @@
 # Benchmarks: `make bench`. Speed is judged here, never in unit tests.
+# MuJoCo (Debian libmujoco-dev) is installed by the bench set-up only
+# (scripts/install-bench-deps.sh); the library and `make test` never need it.
 BENCH_BIN = $(BUILD)/bench_core
+BENCH_SPEED = $(BUILD)/bench_speed
+BENCH_REPS ?= 5
+BENCH_RESULT = bench/results/$(shell date -u +%Y-%m-%d).txt
 
-$(BENCH_BIN): bench/bench_core.c $(LIB)
+$(BENCH_BIN): bench/bench_core.c bench/bench_chain.h $(LIB)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -o $@ $< $(LIB) $(LIBS_CORE)
 
-bench: deps
-	@$(MAKE) --no-print-directory $(BENCH_BIN) $(CLI)
+# capdyn vs MuJoCo through both C APIs (bench/bench_speed.c, docs/performance.md)
+$(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -D_DEFAULT_SOURCE -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lmujoco
+
+bench-deps: deps
+	@bash scripts/install-bench-deps.sh
+
+bench: bench-deps
+	@$(MAKE) --no-print-directory $(BENCH_BIN) $(BENCH_SPEED) $(CLI)
 	$(BENCH_BIN)
 	@bash bench/bench_scenarios.sh
+	@mkdir -p bench/results
+	$(BENCH_SPEED) -r $(BENCH_REPS) -o $(BENCH_RESULT)
+	@echo "results: $(BENCH_RESULT)"
+
+.PHONY: bench-deps

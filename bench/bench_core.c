@@ -3,6 +3,7 @@
  * issue 3 (right-hand-side evaluations and wall time). Wall times are medians
  * of repeated runs on this machine; rhs counts are exact and repeatable. */
 #include <capdyn/capdyn.h>
+#include "bench_chain.h"
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -23,39 +24,13 @@ static int cmp(const void *a, const void *b)
 #include <stdlib.h>
 static double median(double *v, int n) { qsort(v, (size_t)n, sizeof *v, cmp); return v[n / 2]; }
 
-static cd_model *chain(int n)
-{
-    cd_model *m = cd_model_create();
-    cd_error e;
-    cd_system_desc s = cd_system_desc_default();
-    cd_link_desc l = cd_link_desc_default();
-    int i, prev;
-    s.mass = 100;
-    s.inertia[0] = s.inertia[4] = s.inertia[8] = 20;
-    cd_model_add_system(m, &s, &e);
-    prev = 0;
-    for (i = 0; i < n; i++) {
-        l.parent = prev;
-        l.pos[0] = 0.3;
-        l.com[0] = 0.15;
-        l.mass = 2;
-        l.inertia[0] = 0.01; l.inertia[4] = l.inertia[8] = 0.05;
-        l.axis[0] = 0; l.axis[1] = (i % 2); l.axis[2] = 1 - (i % 2);
-        l.q0 = 0.1 * i;
-        l.qd0 = 0.05;
-        prev = cd_model_add_link(m, 0, &l, &e);
-    }
-    cd_model_finalize(m, &e);
-    return m;
-}
-
 static void bench_rhs(void)
 {
     int sizes[5] = {2, 7, 12, 20, 30}, k;
     printf("right-hand side (kinematics + CRBA + Cholesky + RNE), free-floating chain\n");
     printf("%8s %14s\n", "joints", "us/eval");
     for (k = 0; k < 5; k++) {
-        cd_model *m = chain(sizes[k]);
+        cd_model *m = bench_chain(sizes[k], 1);
         cd_error e;
         cd_data *d = cd_data_create(m, 0, &e);
         double t[7];

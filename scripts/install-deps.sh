@@ -1,11 +1,14 @@
 #!/usr/bin/env bash
 # Installs capdyn's build, test and plotting dependencies from Debian packages,
 # only those that are missing. Idempotent; works as root or through sudo.
-# Usage: scripts/install-deps.sh        (CAPDYN_NO_INSTALL=1 to only check)
+# Usage: scripts/install-deps.sh        (CAPDYN_NO_INSTALL=1 to only check;
+#        CAPDYN_EXTRA_PKGS="a b" adds packages, e.g. scripts/install-bench-deps.sh)
 set -euo pipefail
 
 pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
       libtomlplusplus-dev libcriterion-dev gnuplot-nox)
+# shellcheck disable=SC2206
+pkgs+=(${CAPDYN_EXTRA_PKGS:-})
 
 missing=()
 for p in "${pkgs[@]}"; do

@@ -12,19 +12,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#if defined(__SANITIZE_ADDRESS__)
-#define CD_COUNT_ALLOC 0
-#elif defined(__has_feature)
-#if __has_feature(address_sanitizer)
-#define CD_COUNT_ALLOC 0
-#endif
-#endif
-#ifndef CD_COUNT_ALLOC
-#define CD_COUNT_ALLOC 1
-#endif
+#include "alloc_count.h"
 
-static volatile int counting;
-static volatile long nalloc;
+volatile int cd_test_counting;
+volatile long cd_test_nalloc;
+#define counting cd_test_counting
+#define nalloc cd_test_nalloc
 
 #if CD_COUNT_ALLOC
 extern void *__libc_malloc(size_t);

@@ -4,4 +4,5 @@
 #define CAPDYN_CAPDYN_H
 #include "capdyn/model.h"
 #include "capdyn/sim.h"
+#include "capdyn/dynamics.h"
 #endif

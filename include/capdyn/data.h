@@ -204,18 +204,21 @@ typedef struct cd_data {
 /* Allocates data for a finalized model and sets the initial state from the
  * model (cd_data_reset). event_capacity is the ring size of the event log
  * (0 = 4096). Returns NULL (err filled) on failure: CD_EINVAL for a model
- * that is not finalized or options out of range, CD_ENOMEM, or the reset's
- * failure (e.g. no static equilibrium for equilibrium_start). */
+ * that is not finalized, has nothing to simulate (no degree of freedom and
+ * no contact slot) or options out of range, CD_ENOMEM, or the reset's
+ * failure (no static equilibrium for equilibrium_start). */
 cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err);
 /* The same with a caller's allocator for the data's block (NULL = malloc). */
 cd_data *cd_data_create_ex(const cd_model *m, int event_capacity, const cd_allocator *alloc, cd_error *err);
 /* Frees data; NULL is a no-op. */
 void cd_data_free(cd_data *d);
 /* Resets time, state, modes, inputs, log and statistics to the model's
- * initial values (keeps d->opt and the callbacks). CD_OK, or CD_ENUMERIC
- * (err filled) if the initial state cannot be evaluated or, with
- * opt.equilibrium_start, no static equilibrium is found near it; d is then
- * at the model's initial state with its contacts closed unloaded. */
+ * initial values (keeps d->opt and the callbacks). CD_OK, or (err filled)
+ * with opt.equilibrium_start CD_ENUMERIC if no static equilibrium is found
+ * near the initial pose (d is then at that pose with its contacts closed
+ * unloaded) and CD_ENOMEM if the settle's work space cannot be had. An
+ * initial state that cannot be evaluated (non-finite, singular mass matrix)
+ * is not an error here: the first step reports it, with its time. */
 cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err);
 
 /* Sets (or clears, with NULL) the control callback. */

@@ -4,15 +4,16 @@
  * Algorithm choice: the composite-rigid-body algorithm (CRBA) builds H in
  * O(n^2), a Cholesky factorisation solves it in O(n^3/6) (cd_math.h says why
  * not GSL's: it aborts through GSL's error handler on a singular H); the bias h comes from one RNE
- * pass. For the trees capdyn targets (a gripper: 4-12 joints; chaser + arm +
- * hand: <= ~30) this is faster than the articulated-body algorithm, whose
- * O(n) pays off only beyond that, and H is at hand for diagnostics. All
+ * pass. cd_forward_dynamics uses the articulated-body algorithm (aba.c) from
+ * CD_ABA_MIN_DOF on, measured faster at every size (aba.h); CRBA stays for H. All
  * spatial quantities are Plucker vectors in world axes about one reference
  * point per system, the current base position (SpaceDyn's R0), which keeps
  * moment arms small and needs no coordinate transforms between bodies. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "../kinematics/prescribed.h"
+#include "aba.h"
+#include "capdyn/dynamics.h"
 
 #include <string.h>
 
@@ -130,7 +131,10 @@ static int prescribed_acc(const cd_model *m, const cd_data *d, int s, double *a,
     return np;
 }
 
-cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
+cd_status cd_forward_dynamics(const cd_model *m, cd_data *d) { return cd_forward_dynamics_method(m, d, CD_FD_AUTO); }
+
+/* ABA (aba.c) from CD_ABA_MIN_DOF on, measured crossover (docs/performance.md) */
+cd_status cd_forward_dynamics_method(const cd_model *m, cd_data *d, cd_fd_method method)
 {
     int s, i, j;
     for (s = 0; s < m->nsys; s++) {
@@ -138,11 +142,16 @@ cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
         double *rhs = d->work + 12 * m->nbody, *zero = rhs + n, *acc = zero + n, *idf = acc + n;
         int *is_p = (int *)(void *)(d->jwork); /* (n) flags, jwork is 12 maxdof + 36 doubles */
         if (n == 0) continue;
+        /* prescribed DoFs take the partitioned CRBA path below */
+        if (m->npresc) np = prescribed_acc(m, d, s, acc, is_p);
+        if (np == 0 && (method == CD_FD_ABA || (method == CD_FD_AUTO && n >= CD_ABA_MIN_DOF))) {
+            if (cd_aba_forward(m, d, s) != CD_OK) return CD_ENUMERIC;
+            continue;
+        }
         for (i = 0; i < n; i++) zero[i] = 0.0;
         cd_inverse_dynamics(m, d, s, zero, rhs); /* rhs = h - J^T F (bias) */
         for (i = 0; i < n; i++) rhs[i] = d->tau[va + i] - rhs[i];
         cd_mass_matrix(m, d, s, d->H);
-        if (m->npresc) np = prescribed_acc(m, d, s, acc, is_p);
         if (np == 0) {
             if (cd_chol_decomp(d->H, n) != 0) return CD_ENUMERIC;
             cd_chol_solve(d->H, n, rhs);

@@ -4,6 +4,7 @@
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "integ.h"
+#include "../dynamics/aba.h"
 
 #include <stdint.h>
 #include <stdio.h>
@@ -20,6 +21,14 @@ void cd_data_free(cd_data *d)
     cd_integ_free(d->integ);
     a = d->allocator;
     a.free(d->block, a.ctx);
+}
+
+/* d->work: 12 nbody + 4 maxdof doubles for RNE/CRBA, at least
+ * CD_ABA_WORK_PER_BODY nbody for the articulated-body path (dynamics/aba.h) */
+static int work_size(int nb, int maxdof)
+{
+    int crba = 12 * nb + 4 * maxdof, aba = CD_ABA_WORK_PER_BODY * nb;
+    return crba > aba ? crba : aba;
 }
 
 /* Lays the arrays out in one block: with base == NULL only measures. Every
@@ -45,7 +54,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(sys_ref, 3 * m->nsys);
     CARVE(udot, m->nv); CARVE(qfrc_actuator, m->nv); CARVE(qfrc_passive, m->nv); CARVE(qfrc_constraint, m->nv);
     CARVE(tau, m->nv); CARVE(act_force, m->nu); CARVE(act_velocity, m->nu);
-    CARVE(body_fext, 6 * nb); CARVE(H, maxdof * maxdof); CARVE(work, 12 * nb + 4 * maxdof);
+    CARVE(body_fext, 6 * nb); CARVE(H, maxdof * maxdof); CARVE(work, work_size(nb, maxdof));
     CARVE(jwork, 12 * maxdof + 36);
     {
         size_t cnt = (size_t)(2 * nb) * sizeof(cd_rbi);

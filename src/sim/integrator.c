@@ -303,10 +303,9 @@ cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err)
      * (|x| at round-off of the placement) counts as closed */
     double tol = d->opt.equilibrium_start ? 1e-9 : 0.0;
     if (m->npresc) cd_prescribed_apply(m, d->t, d->y);
-    if (cd_forward(m, d) != CD_OK) {
-        cd_error_set(err, CD_ENUMERIC, "the initial state cannot be evaluated (non-finite value or singular mass matrix)");
-        return CD_ENUMERIC;
-    }
+    /* a state that cannot be evaluated is left to the first step to report
+     * (with its time); the data stays usable for inspection */
+    if (cd_forward(m, d) != CD_OK) return CD_OK;
     for (k = 0; k < m->nslot; k++)
         if (!d->slot_geomfail[k] && d->slot_x[k] > -tol && (d->slot_x[k] > 0 || tol > 0)) {
             d->slot_mode[k] = CD_MODE_STICK;
@@ -325,10 +324,7 @@ cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err)
         cd_status st = cd_equilibrium_start(m, d, err);
         if (st != CD_OK) return st;
     }
-    if (cd_forward(m, d) != CD_OK) {
-        cd_error_set(err, CD_ENUMERIC, "the initial state cannot be evaluated (non-finite value or singular mass matrix)");
-        return CD_ENUMERIC;
-    }
+    (void)cd_forward(m, d);
     return CD_OK;
 }
 

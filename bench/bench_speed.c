@@ -1,0 +1,469 @@
+/* capdyn vs MuJoCo, side by side (issue 11; `make bench`, docs/performance.md).
+ *
+ *  1. Scenes, interleaved, R repetitions (default 5), each run in a fresh
+ *     process (fork + exec) so that its peak resident memory is its own:
+ *       grasp   scenarios/paper_fig5_envelope_grasp.toml (rtol 1e-6) and its
+ *               twin bench/mjcf/fig5_grasp.xml: 2 s closing + 10 s hold;
+ *               accuracy: object offset over the hold and creep rate
+ *       incline bench/incline.toml and bench/mjcf/incline.xml, 10 s;
+ *               accuracy: drift along the slope between t = 1 s and 10 s
+ *     Table: wall time per simulated second, real-time factor (RTF),
+ *     capdyn RTF / MuJoCo RTF per repetition (min, median), steps, rhs
+ *     evaluations (MuJoCo: one mj_forward per mj_step), peak RSS and heap.
+ *  2. Forward dynamics of free-floating chains, 1 to 64 joints: capdyn
+ *     cd_kinematics + cd_forward_dynamics_method (CRBA, ABA) vs MuJoCo
+ *     mj_forward (no contacts), ns per call, min and median over interleaved
+ *     repetitions; the crossover CRBA -> ABA is read from this table.
+ *
+ * capdyn is driven only through its public headers (include/capdyn/ headers).
+ * Usage: bench_speed [-r reps] [-o results.txt] [--fd-only] [--scenes-only]
+ * (run from the repository root). */
+#include <capdyn/capdyn.h>
+#include <capdyn/io.h>
+#include "bench_chain.h"
+#include <gsl/gsl_errno.h>
+#include <mujoco/mujoco.h>
+
+#include <malloc.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/time.h>
+#include <sys/types.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#define MAXREP 64
+
+static FILE *out_file;
+
+/* print to stdout and to the results file */
+static void say(const char *fmt, ...)
+{
+    va_list ap;
+    va_start(ap, fmt);
+    vprintf(fmt, ap);
+    va_end(ap);
+    if (out_file) {
+        va_start(ap, fmt);
+        vfprintf(out_file, fmt, ap);
+        va_end(ap);
+    }
+    fflush(stdout);
+}
+
+static double now(void)
+{
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int cmp_double(const void *a, const void *b)
+{
+    double x = *(const double *)a, y = *(const double *)b;
+    return (x > y) - (x < y);
+}
+static double median_of(const double *v, int n)
+{
+    double t[MAXREP];
+    memcpy(t, v, (size_t)n * sizeof *v);
+    qsort(t, (size_t)n, sizeof *t, cmp_double);
+    return n % 2 ? t[n / 2] : 0.5 * (t[n / 2 - 1] + t[n / 2]);
+}
+static double min_of(const double *v, int n)
+{
+    double r = v[0];
+    int i;
+    for (i = 1; i < n; i++)
+        if (v[i] < r) r = v[i];
+    return r;
+}
+
+static long heap_bytes(void)
+{
+    struct mallinfo2 mi = mallinfo2();
+    return (long)(mi.uordblks + mi.hblkhd);
+}
+
+/* ---- scenes ------------------------------------------------------------- */
+enum { ENG_CAPDYN = 0, ENG_MUJOCO = 1 };
+enum { SC_GRASP = 0, SC_INCLINE = 1, NSCENE = 2 };
+static const char *scene_name[NSCENE] = {"grasp", "incline"};
+static const double T_CLOSE = 2.0, T_HOLD = 10.0, T_INCLINE = 10.0, T_SETTLE = 1.0;
+
+/* what a child reports back through its pipe */
+typedef struct {
+    int ok;
+    double wall;      /* [s] of the simulation calls only */
+    double tsim;      /* simulated [s] */
+    long steps, nrhs;
+    long heap;        /* heap in use by the engine's model + data [B] */
+    long hwm_kb;      /* peak resident memory of the run's process (VmHWM) [kB] */
+    double acc;       /* grasp: object offset over the hold; incline: drift [m] */
+    double rate;      /* the same over the second half of that span, per second [m/s] */
+    double pos[3];    /* final object / block position [m] */
+    char msg[1100];
+} run_result;
+
+/* object/block position of a capdyn run: the free system's base */
+static void capdyn_pos(const cd_model *m, const cd_data *d, int s, double p[3])
+{
+    cd_sys_state st = cd_state_of(m, d, s);
+    memcpy(p, st.pos, 3 * sizeof(double));
+}
+
+static double dist3(const double a[3], const double b[3])
+{
+    double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
+    return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+static void run_capdyn(int scene, run_result *r)
+{
+    static const char *ovr_grasp[] = {"simulation.rtol=1e-6"};
+    const char *path = scene == SC_GRASP ? "scenarios/paper_fig5_envelope_grasp.toml" : "bench/incline.toml";
+    cd_error e;
+    long h0 = heap_bytes();
+    cd_scenario *sc = cd_scenario_load(path, scene == SC_GRASP ? ovr_grasp : NULL, scene == SC_GRASP ? 1 : 0, &e);
+    cd_data *d;
+    int s;
+    double t0, tmid = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
+    double tend = scene == SC_GRASP ? T_CLOSE + T_HOLD : T_INCLINE;
+    cd_status st;
+    if (!sc) { snprintf(r->msg, sizeof r->msg, "%s", e.msg); return; }
+    d = cd_data_create(sc->model, sc->event_capacity, &e);
+    if (!d) { snprintf(r->msg, sizeof r->msg, "%s", e.msg); cd_scenario_free(sc); return; }
+    r->heap = heap_bytes() - h0;
+    s = cd_model_system_id(sc->model, scene == SC_GRASP ? "object" : "block");
+    {
+        /* three segments: to tmid, to the middle of the span, to the end;
+         * only the cd_sim_advance calls are timed */
+        double tseg[3], p[3][3];
+        int k;
+        tseg[0] = tmid; tseg[1] = 0.5 * (tmid + tend); tseg[2] = tend;
+        r->wall = 0;
+        st = CD_OK;
+        for (k = 0; k < 3 && st == CD_OK; k++) {
+            t0 = now();
+            st = cd_sim_advance(sc->model, d, tseg[k], NULL, NULL, &e);
+            r->wall += now() - t0;
+            capdyn_pos(sc->model, d, s, p[k]);
+        }
+        if (st != CD_OK) {
+            snprintf(r->msg, sizeof r->msg, "%s", e.msg);
+        } else {
+            r->ok = 1;
+            r->tsim = tend;
+            r->steps = d->stats.nsteps;
+            r->nrhs = d->stats.nrhs;
+            memcpy(r->pos, p[2], sizeof r->pos);
+            r->acc = dist3(p[2], p[0]);
+            r->rate = dist3(p[2], p[1]) / (tseg[2] - tseg[1]);
+        }
+    }
+    cd_data_free(d);
+    cd_scenario_free(sc);
+}
+
+static void run_mujoco(int scene, run_result *r)
+{
+    const char *path = scene == SC_GRASP ? "bench/mjcf/fig5_grasp.xml" : "bench/mjcf/incline.xml";
+    char err[1000] = "";
+    long h0 = heap_bytes();
+    mjModel *m = mj_loadXML(path, NULL, err, (int)sizeof err);
+    mjData *d;
+    int body, nstep, k;
+    double t0, tmid = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
+    double tend = scene == SC_GRASP ? T_CLOSE + T_HOLD : T_INCLINE;
+    if (!m) { snprintf(r->msg, sizeof r->msg, "%s: %s", path, err); return; }
+    d = mj_makeData(m);
+    r->heap = heap_bytes() - h0;
+    body = mj_name2id(m, mjOBJ_BODY, scene == SC_GRASP ? "object" : "block");
+    if (scene == SC_GRASP) {
+        static const char *jn[4] = {"left1", "left2", "right1", "right2"};
+        static const double tau[4] = {0.2, 0.1, 0.2, 0.1};
+        for (k = 0; k < 4; k++) d->qfrc_applied[m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, jn[k])]] = tau[k];
+    }
+    {
+        double tseg[3], p[3][3];
+        int seg;
+        tseg[0] = tmid; tseg[1] = 0.5 * (tmid + tend); tseg[2] = tend;
+        r->wall = 0;
+        for (seg = 0; seg < 3; seg++) {
+            nstep = (int)lround((tseg[seg] - d->time) / m->opt.timestep);
+            t0 = now();
+            for (k = 0; k < nstep; k++) mj_step(m, d);
+            r->wall += now() - t0;
+            memcpy(p[seg], d->xpos + 3 * body, sizeof p[seg]);
+        }
+        r->ok = 1;
+        r->tsim = d->time;
+        r->steps = lround(d->time / m->opt.timestep);
+        r->nrhs = r->steps;
+        memcpy(r->pos, p[2], sizeof r->pos);
+        r->acc = dist3(p[2], p[0]);
+        r->rate = dist3(p[2], p[1]) / (tseg[2] - tseg[1]);
+    }
+    mj_deleteData(d);
+    mj_deleteModel(m);
+}
+
+/* One run in a fresh process: this program re-executed as
+ * `bench_speed --child ENGINE SCENE`, which writes its run_result to stdout
+ * (a pipe); a fresh exec (not a bare fork) so that the peak resident memory
+ * it reports is the run's own, not the parent's. */
+static const char *self_path;
+
+/* peak resident set of this process [kB] (Linux VmHWM; starts afresh at exec,
+ * unlike getrusage's ru_maxrss, which keeps the pre-exec image's peak) */
+static long vm_hwm_kb(void)
+{
+    FILE *f = fopen("/proc/self/status", "r");
+    char line[256];
+    long kb = -1;
+    if (!f) return -1;
+    while (fgets(line, sizeof line, f))
+        if (sscanf(line, "VmHWM: %ld kB", &kb) == 1) break;
+    fclose(f);
+    return kb;
+}
+
+static int child_main(int engine, int scene)
+{
+    run_result r;
+    memset(&r, 0, sizeof r);
+    if (engine == ENG_CAPDYN) run_capdyn(scene, &r);
+    else run_mujoco(scene, &r);
+    r.hwm_kb = vm_hwm_kb();
+    return fwrite(&r, sizeof r, 1, stdout) == 1 ? 0 : 1;
+}
+
+static run_result run_child(int engine, int scene)
+{
+    run_result r;
+    int fd[2];
+    pid_t pid;
+    memset(&r, 0, sizeof r);
+    if (pipe(fd) != 0) { snprintf(r.msg, sizeof r.msg, "pipe failed"); return r; }
+    fflush(NULL);
+    pid = fork();
+    if (pid == 0) {
+        char e[8], sc[8];
+        snprintf(e, sizeof e, "%d", engine);
+        snprintf(sc, sizeof sc, "%d", scene);
+        close(fd[0]);
+        dup2(fd[1], STDOUT_FILENO);
+        close(fd[1]);
+        execl("/proc/self/exe", self_path, "--child", e, sc, (char *)NULL);
+        _exit(127);
+    }
+    close(fd[1]);
+    if (pid < 0) { close(fd[0]); snprintf(r.msg, sizeof r.msg, "fork failed"); return r; }
+    {
+        int status;
+        size_t got = 0;
+        ssize_t k;
+        while (got < sizeof r && (k = read(fd[0], (char *)&r + got, sizeof r - got)) > 0) got += (size_t)k;
+        close(fd[0]);
+        waitpid(pid, &status, 0);
+        if (got != sizeof r) { memset(&r, 0, sizeof r); snprintf(r.msg, sizeof r.msg, "child died"); }
+    }
+    return r;
+}
+
+static int bench_scenes(int reps)
+{
+    static double rtf[NSCENE][2][MAXREP], wps[NSCENE][2][MAXREP], ratio[NSCENE][MAXREP];
+    static run_result last[NSCENE][2];
+    static long rss[NSCENE][2];
+    static double acc[NSCENE][2][MAXREP], rate[NSCENE][2][MAXREP];
+    int rep, sc, eng, failed = 0;
+    say("\n== scenes: capdyn (GSL, event-located stick-slip) vs MuJoCo %s (dt 2 ms), %d interleaved repetitions ==\n",
+        mj_versionString(), reps);
+    for (rep = 0; rep < reps; rep++)
+        for (sc = 0; sc < NSCENE; sc++) {
+            int k;
+            for (k = 0; k < 2; k++) {
+                /* alternate which engine goes first */
+                run_result r;
+                eng = (rep + k) % 2;
+                r = run_child(eng, sc);
+                if (!r.ok) {
+                    fprintf(stderr, "bench_speed: %s %s failed: %s\n", eng ? "MuJoCo" : "capdyn", scene_name[sc], r.msg);
+                    failed = 1;
+                    continue;
+                }
+                rtf[sc][eng][rep] = r.tsim / r.wall;
+                wps[sc][eng][rep] = r.wall / r.tsim;
+                acc[sc][eng][rep] = r.acc;
+                rate[sc][eng][rep] = r.rate;
+                last[sc][eng] = r;
+                if (r.hwm_kb > rss[sc][eng]) rss[sc][eng] = r.hwm_kb;
+            }
+            ratio[sc][rep] = rtf[sc][ENG_CAPDYN][rep] / rtf[sc][ENG_MUJOCO][rep];
+        }
+    if (failed) return 1;
+    say("%-8s %-7s %11s %22s %7s %7s %8s %9s %6s %7s %10s %10s\n", "scene", "engine", "wall/sim-s", "RTF",
+        "ratio", "ratio", "steps", "rhs", "RSS", "heap", "offset", "rate");
+    say("%-8s %-7s %11s %22s %7s %7s %8s %9s %6s %7s %10s %10s\n", "", "", "[ms/s] med", "median (min..max)",
+        "min", "median", "", "evals", "[MB]", "[kB]", "[um]", "[um/s]");
+    for (sc = 0; sc < NSCENE; sc++)
+        for (eng = 0; eng < 2; eng++) {
+            const run_result *r = &last[sc][eng];
+            char rb[40], r1[16] = "", r2[16] = "";
+            double mx = rtf[sc][eng][0];
+            int i;
+            for (i = 1; i < reps; i++)
+                if (rtf[sc][eng][i] > mx) mx = rtf[sc][eng][i];
+            snprintf(rb, sizeof rb, "%.3g (%.3g..%.3g)", median_of(rtf[sc][eng], reps), min_of(rtf[sc][eng], reps), mx);
+            if (eng == ENG_CAPDYN) {
+                snprintf(r1, sizeof r1, "%.3g", min_of(ratio[sc], reps));
+                snprintf(r2, sizeof r2, "%.3g", median_of(ratio[sc], reps));
+            }
+            say("%-8s %-7s %11.2f %22s %7s %7s %8ld %9ld %6.1f %7.0f %10.3g %10.3g\n", scene_name[sc],
+                eng == ENG_CAPDYN ? "capdyn" : "MuJoCo", 1e3 * median_of(wps[sc][eng], reps), rb, r1, r2, r->steps,
+                r->nrhs, rss[sc][eng] / 1024.0, r->heap / 1024.0, 1e6 * median_of(acc[sc][eng], reps),
+                1e6 * median_of(rate[sc][eng], reps));
+        }
+    say("final object position [mm]: grasp capdyn (%.4f, %.4f, %.4f), MuJoCo (%.4f, %.4f, %.4f)\n",
+        1e3 * last[SC_GRASP][0].pos[0], 1e3 * last[SC_GRASP][0].pos[1], 1e3 * last[SC_GRASP][0].pos[2],
+        1e3 * last[SC_GRASP][1].pos[0], 1e3 * last[SC_GRASP][1].pos[1], 1e3 * last[SC_GRASP][1].pos[2]);
+    say("offset: grasp = |object(12 s) - object(2 s)| over the 10 s hold; incline = |block(10 s) - block(1 s)|;\n"
+        "rate: creep rate over the second half of that span (grasp 7-12 s, incline 5.5-10 s).\n"
+        "ratio = capdyn RTF / MuJoCo RTF of the same repetition. RSS: peak resident memory of the process\n"
+        "running one engine (both libraries mapped); heap: model + data allocated by the engine.\n");
+    return 0;
+}
+
+/* ---- forward-dynamics scaling --------------------------------------------- */
+/* bench_chain (bench_chain.h) as MJCF, written to a temporary file and loaded */
+static mjModel *mujoco_chain(int n)
+{
+    char path[] = "/tmp/capdyn_bench_chainXXXXXX", err[1000] = "";
+    int fd = mkstemp(path), i;
+    FILE *f;
+    mjModel *m;
+    if (fd < 0) { perror("mkstemp"); exit(1); }
+    f = fdopen(fd, "w");
+    fprintf(f, "<mujoco><option gravity=\"0 0 0\"/><worldbody><body name=\"base\"><freejoint/>"
+               "<inertial pos=\"0 0 0\" mass=\"100\" diaginertia=\"20 20 20\"/>\n");
+    for (i = 0; i < n; i++)
+        fprintf(f, "<body pos=\"0.3 0 0\"><joint type=\"hinge\" axis=\"0 %d %d\"/>"
+                   "<inertial pos=\"0.15 0 0\" mass=\"2\" diaginertia=\"0.01 0.05 0.05\"/>\n", i % 2, 1 - i % 2);
+    for (i = 0; i <= n; i++) fprintf(f, "</body>");
+    fprintf(f, "</worldbody></mujoco>\n");
+    fclose(f);
+    m = mj_loadXML(path, NULL, err, (int)sizeof err);
+    remove(path);
+    if (!m) { fprintf(stderr, "bench_speed: MuJoCo chain: %s\n", err); exit(1); }
+    return m;
+}
+
+enum { FD_CRBA = 0, FD_ABA, FD_MJ, FD_FIX_CRBA, FD_FIX_ABA, NFD };
+
+static int bench_fd(int reps)
+{
+    static const int sizes[] = {0, 1, 2, 3, 4, 6, 8, 10, 12, 14, 16, 20, 24, 32, 48, 64};
+    const int nsize = (int)(sizeof sizes / sizeof sizes[0]);
+    static double ns[32][NFD][MAXREP];
+    int k, rep, meth, cross_free = -1, cross_fixed = -1;
+    say("\n== forward dynamics per call, free-floating chain (fixed-base columns: the same chain on a fixed base) ==\n");
+    say("capdyn: cd_kinematics + cd_forward_dynamics_method; MuJoCo: mj_forward (no geoms, no contacts)\n");
+    say("ns per call, median [min] of %d interleaved repetitions\n", reps);
+    say("%6s %5s %18s %18s %18s %9s | %18s %18s\n", "joints", "DoF", "capdyn CRBA", "capdyn ABA", "MuJoCo mj_forward",
+        "best/MJ", "fixed CRBA", "fixed ABA");
+    for (k = 0; k < nsize; k++) {
+        int n = sizes[k], calls = 40000 / (n + 4) + 50, i;
+        cd_error e;
+        /* a fixed base without joints has nothing to solve: the same free
+         * body stands in (its fixed-base columns are not printed) */
+        cd_model *mf = bench_chain(n, 1), *mx = bench_chain(n, n == 0);
+        cd_data *df = cd_data_create(mf, 0, &e), *dx = cd_data_create(mx, 0, &e);
+        mjModel *mm = mujoco_chain(n);
+        mjData *md = mj_makeData(mm);
+        double med[NFD], mn[NFD];
+        if (!df || !dx) { fprintf(stderr, "bench_speed: %s\n", e.msg); exit(1); }
+        for (i = 0; i < n; i++) { md->qpos[7 + i] = 0.1 * i; md->qvel[6 + i] = 0.05; }
+        for (rep = 0; rep < reps; rep++)
+            for (meth = 0; meth < NFD; meth++) {
+                int which = (meth + rep) % NFD, c;
+                double t0 = now();
+                switch (which) {
+                case FD_CRBA:
+                    for (c = 0; c < calls; c++) { cd_kinematics(mf, df); cd_forward_dynamics_method(mf, df, CD_FD_CRBA); }
+                    break;
+                case FD_ABA:
+                    for (c = 0; c < calls; c++) { cd_kinematics(mf, df); cd_forward_dynamics_method(mf, df, CD_FD_ABA); }
+                    break;
+                case FD_MJ:
+                    for (c = 0; c < calls; c++) mj_forward(mm, md);
+                    break;
+                case FD_FIX_CRBA:
+                    for (c = 0; c < calls; c++) { cd_kinematics(mx, dx); cd_forward_dynamics_method(mx, dx, CD_FD_CRBA); }
+                    break;
+                default:
+                    for (c = 0; c < calls; c++) { cd_kinematics(mx, dx); cd_forward_dynamics_method(mx, dx, CD_FD_ABA); }
+                    break;
+                }
+                ns[k][which][rep] = (now() - t0) / calls * 1e9;
+            }
+        for (meth = 0; meth < NFD; meth++) { med[meth] = median_of(ns[k][meth], reps); mn[meth] = min_of(ns[k][meth], reps); }
+        {
+            char c[NFD][32];
+            for (meth = 0; meth < NFD; meth++) snprintf(c[meth], sizeof c[meth], "%.0f [%.0f]", med[meth], mn[meth]);
+            say("%6d %5d %18s %18s %18s %9.2f | %18s %18s\n", n, n + 6, c[FD_CRBA], c[FD_ABA], c[FD_MJ],
+                (med[FD_CRBA] < med[FD_ABA] ? med[FD_CRBA] : med[FD_ABA]) / med[FD_MJ], n ? c[FD_FIX_CRBA] : "-",
+                n ? c[FD_FIX_ABA] : "-");
+        }
+        /* crossover: the smallest size from which ABA stays faster, judged on
+         * the minima (the runs least disturbed by other load on the machine) */
+        if (mn[FD_ABA] < mn[FD_CRBA]) { if (cross_free < 0) cross_free = n + 6; } else cross_free = -1;
+        if (n == 0) { /* a fixed base without joints has nothing to solve */
+        } else if (mn[FD_FIX_ABA] < mn[FD_FIX_CRBA]) { if (cross_fixed < 0) cross_fixed = n; } else cross_fixed = -1;
+        mj_deleteData(md);
+        mj_deleteModel(mm);
+        cd_data_free(df); cd_data_free(dx);
+        cd_model_free(mf); cd_model_free(mx);
+    }
+    say("measured crossover (ABA minimum faster from here on): free base %d DoF, fixed base %d DoF; "
+        "cd_forward_dynamics switches at %d DoF (cd_fd_aba_min_dof)\n", cross_free, cross_fixed, cd_fd_aba_min_dof());
+    say("best/MJ = min(capdyn CRBA, capdyn ABA) / MuJoCo (< 1: capdyn faster)\n");
+    return 0;
+}
+
+int main(int argc, char **argv)
+{
+    int reps = 5, i, do_fd = 1, do_scenes = 1, rc = 0;
+    const char *out = NULL;
+    char host[256] = "?";
+    time_t t = time(NULL);
+    char date[64];
+    self_path = argv[0];
+    if (argc == 4 && !strcmp(argv[1], "--child")) return child_main(atoi(argv[2]), atoi(argv[3]));
+    for (i = 1; i < argc; i++) {
+        if (!strcmp(argv[i], "-r") && i + 1 < argc) reps = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "-o") && i + 1 < argc) out = argv[++i];
+        else if (!strcmp(argv[i], "--fd-only")) do_scenes = 0;
+        else if (!strcmp(argv[i], "--scenes-only")) do_fd = 0;
+        else {
+            fprintf(stderr, "usage: %s [-r reps (5..%d)] [-o results.txt] [--fd-only | --scenes-only]\n", argv[0], MAXREP);
+            return 2;
+        }
+    }
+    if (reps < 1 || reps > MAXREP) { fprintf(stderr, "bench_speed: -r: expected 1..%d, got %d\n", MAXREP, reps); return 2; }
+    gsl_set_error_handler_off();
+    if (out && !(out_file = fopen(out, "w"))) { perror(out); return 1; }
+    gethostname(host, sizeof host - 1);
+    strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&t));
+    say("capdyn %s vs MuJoCo %s -- %s, host %s, %ld online CPUs\n", cd_version(), mj_versionString(), date, host,
+        sysconf(_SC_NPROCESSORS_ONLN));
+    say("command: make bench (bench/bench_speed.c, -r %d)\n", reps);
+    if (do_fd) rc |= bench_fd(reps);
+    if (do_scenes) rc |= bench_scenes(reps);
+    if (out_file) fclose(out_file);
+    return rc;
+}
