@@ -72,6 +72,9 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(act_piece, m->nu);
     CARVE(ev, d ? d->ev_cap : 0);
 #undef CARVE
+    off = (off + 15) & ~(size_t)15;
+    if (base) d->integ = base + off;
+    off += cd_integ_size(m);
     return off;
 }
 
@@ -123,8 +126,8 @@ cd_data *cd_data_create_ex(const cd_model *m, int event_capacity, const cd_alloc
     d->opt = m->opt;
     d->slot_tswitch = d->sw_tswitch;   /* the slots are the first switch units */
     d->slot_held = d->sw_held;
-    d->integ = cd_integ_create(m, d, err);
-    if (!d->integ) {
+    if (!cd_integ_create(m, d, d->integ, err)) {
+        cd_integ_free(d->integ);
         a.free(block, a.ctx);
         return NULL;
     }

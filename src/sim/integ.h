@@ -3,8 +3,12 @@
 #define CD_INTEG_H
 #include "capdyn/sim.h"
 
-/* Creates the integrator of d (GSL objects and buffers); NULL with err. */
-void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err);
+/* Bytes of the integrator's state and buffers (a region of the data's block). */
+size_t cd_integ_size(const cd_model *m);
+/* Sets up the integrator of d in mem (cd_integ_size bytes, 16-aligned) and
+ * allocates GSL's stepper objects; NULL with err. */
+void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err);
+/* Frees GSL's objects (the region itself belongs to the data's block). */
 void cd_integ_free(void *integ);
 /* Back to the start of a run: step size, guard, stepper history. */
 void cd_integ_reset(const cd_model *m, cd_data *d);

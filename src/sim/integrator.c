@@ -117,25 +117,27 @@ static int jac(double t, const double y[], double *dfdy, double dfdt[], void *pa
 void cd_integ_free(void *p)
 {
     cd_integ *I = (cd_integ *)p;
-    cd_allocator a;
     if (!I) return;
     if (I->drv) gsl_odeiv2_driver_free(I->drv);
     if (I->loc) gsl_odeiv2_step_free(I->loc);
-    a = I->d->allocator;
-    a.free(I, a.ctx);
+    I->drv = NULL;
+    I->loc = NULL;
 }
 
-void *cd_integ_create(const cd_model *m, cd_data *d, cd_error *err)
+size_t cd_integ_size(const cd_model *m)
+{
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody);
+    /* the struct, then 13 n + nin doubles */
+    return sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double);
+}
+
+void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
 {
     const gsl_odeiv2_step_type *T = NULL;
-    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody), size;
-    cd_integ *I;
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody);
+    cd_integ *I = (cd_integ *)mem;
     double *p;
-    /* one block: the struct, then 13 n + nin doubles */
-    size = sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double);
-    I = d->allocator.alloc(size, d->allocator.ctx);
-    if (!I) goto nomem;
-    memset(I, 0, size);
+    memset(I, 0, cd_integ_size(m));
     p = (double *)(void *)(((uintptr_t)(I + 1) + 15) & ~(uintptr_t)15);
     I->y0 = p; p += n; I->ylo = p; p += n; I->yhi = p; p += n; I->yerr = p; p += n;
     I->fd_f0 = p; p += n; I->fd_y = p; p += n; I->k1 = p; p += n; I->k2 = p; p += n;
