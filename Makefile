@@ -6,7 +6,7 @@ CC      ?= cc
 CXX     ?= c++
 BUILD   ?= build
 PKGS_CORE = gsl ccd
-PKGS_IO   = hdf5 tomlplusplus
+PKGS_IO   = hdf5 tomlplusplus qhull_r
 WARN    = -Wall -Wextra -Wpedantic -Werror
 OPT     ?= -O2 -g
 CFLAGS_ALL   = -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
@@ -16,7 +16,7 @@ LIBS_IO   = $(shell pkg-config --libs $(PKGS_IO) 2>/dev/null)
 LIBS_TEST = $(shell pkg-config --libs criterion 2>/dev/null)
 
 CORE_SRC = $(wildcard src/math/*.c src/model/*.c src/data/*.c src/kinematics/*.c src/dynamics/*.c src/contact/*.c src/mechanism/*.c src/sim/*.c)
-IO_SRC_C = $(wildcard src/io/*.c)
+IO_SRC_C = $(wildcard src/io/*.c src/analysis/*.c)
 IO_SRC_CXX = $(wildcard src/io/*.cpp)
 CLI_SRC  = $(wildcard src/cli/*.c)
 TEST_SRC = $(wildcard tests/*.c)

@@ -2,10 +2,13 @@
  * program that sees capdyn only through `pkg-config capdyn-io` loads a
  * scenario (written here, a free body tumbling about its major axis), runs
  * it and writes the HDF5 results; the body's kinetic energy must stay within
- * 1e-8 relative and every call must succeed. */
+ * 1e-8 relative and every call must succeed. It also links the analysis
+ * layer (Qhull through capdyn-io.pc): the planar antipodal pair with mu = 1/2
+ * has epsilon mu / sqrt(2 + mu^2) = 1/3 (tests/test_grasp_quality.c). */
 #define _POSIX_C_SOURCE 200809L /* mkdtemp */
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
+#include <capdyn/analysis.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -26,6 +29,10 @@ int main(void)
     FILE *f;
     double ke0, ke1, t;
     int ok;
+    cd_grasp_contact gc[2] = {{{0.1, 0, 0}, {-1, 0, 0}, 0.5, {0, 0, 0}}, {{-0.1, 0, 0}, {1, 0, 0}, 0.5, {0, 0, 0}}};
+    cd_grasp_options go = cd_grasp_options_default();
+    cd_grasp_quality gq;
+    const double origin[3] = {0, 0, 0};
     if (!mkdtemp(dir)) { perror("mkdtemp"); return 1; }
     snprintf(toml, sizeof toml, "%s/s.toml", dir);
     snprintf(h5, sizeof h5, "%s/r.h5", dir);
@@ -48,8 +55,11 @@ int main(void)
     cd_kinematics(sc->model, d);
     cd_momentum(sc->model, d, 0, &ke1, NULL, NULL, NULL, NULL);
     ok = ok && fabs(ke1 - ke0) <= 1e-8 * ke0;
-    printf("capdyn-io %s: scenario loaded, %.1f s run, results written, kinetic energy drift %.2e: %s\n", cd_version(),
-           d->t, fabs(ke1 - ke0) / ke0, ok ? "ok" : "FAILED");
+    go.mode = CD_GRASP_PLANAR;
+    gq.epsilon = 0.0;
+    ok = ok && cd_grasp_quality_eval(gc, 2, origin, &go, &gq, &e) == CD_OK && fabs(gq.epsilon - 1.0 / 3.0) <= 1e-9;
+    printf("capdyn-io %s: scenario loaded, %.1f s run, results written, kinetic energy drift %.2e, grasp epsilon %.15f: %s\n",
+           cd_version(), d->t, fabs(ke1 - ke0) / ke0, gq.epsilon, ok ? "ok" : "FAILED");
     remove(h5);
     remove(toml);
     remove(dir);
