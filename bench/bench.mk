@@ -28,3 +28,16 @@ bench: bench-deps
 	@echo "results: $(BENCH_RESULT)"
 
 .PHONY: bench-deps
+
+# grasp quality: cone linearisation error and Qhull cost vs cone edges
+# (docs/grasp-quality.md); needs only the io library and Qhull
+BENCH_GRASP = $(BUILD)/bench_grasp_quality
+$(BENCH_GRASP): bench/bench_grasp_quality.c $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -o $@ $< $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
+bench-grasp: deps
+	@$(MAKE) --no-print-directory $(BENCH_GRASP)
+	$(BENCH_GRASP)
+
+.PHONY: bench-grasp

@@ -19,11 +19,11 @@
 
 #define seterr cd_error_set
 
-/* The hull of n m-edge cones in 6-D grows roughly like (n m)^3 facets: four
- * contacts take 6 ms at m = 8, 0.5 s at m = 32 and 5 s at m = 64 (bench/
- * grasp_quality.c), and Qhull's merging of the cocircular cone edges fails
- * (wide dupridge) around m = 256. 64 is plenty: the m = 8 cone is already
- * within 1 - cos(pi/8) of the exact one. */
+/* The 6-D hull grows steeply with the number of cone edges: four contacts
+ * take a few ms at m = 8, about 1 s at m = 32 and 10 s at m = 64 (`make
+ * bench-grasp`); a 256-edge run once ended in a Qhull wide-merge error on the
+ * cocircular cone edges. 64 is plenty: at m = 8 epsilon is
+ * already within 3.3 % of the exact cone's (docs/grasp-quality.md). */
 enum { CONE_EDGES_MAX = 64 };
 static const double PI = 3.14159265358979323846;
 
