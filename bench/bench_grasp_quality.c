@@ -8,7 +8,7 @@
  *   lo = eps_32(mu) <= eps_exact(mu) <= hi = eps_32(mu / cos(pi/32)),
  * and the under-estimate 1 - eps_m/eps_exact of m edges lies in
  * [1 - eps_m/lo, 1 - eps_m/hi] (printed as a range, times are wall clock).
- * Also prints the planar hand-computed cases of the tests with their errors. */
+ * Also prints the hand-computed cases of the tests with their errors. */
 #define _POSIX_C_SOURCE 199309L /* clock_gettime */
 #include <capdyn/analysis.h>
 #include <math.h>
@@ -58,7 +58,7 @@ static cd_grasp_contact pc(double px, double py, double nx, double ny, double mu
     return k;
 }
 
-/* the hand-computed planar cases of tests/test_grasp_quality.c: value and error */
+/* the hand-computed cases of tests/test_grasp_quality.c: value and error */
 static void hand_cases(void)
 {
     const double c[3] = {0, 0, 0}, s3 = sqrt(3.0), mus[] = {0.5, 1.0, 1.2, 1.6};
@@ -70,7 +70,7 @@ static void hand_cases(void)
     unsigned i;
     int j;
     o.mode = CD_GRASP_PLANAR;
-    printf("# hand-computed planar cases: epsilon, hand value, difference\n");
+    printf("# hand-computed cases: epsilon, hand value, difference\n");
     cd_grasp_quality_eval(k, 4, c, &o, &q, &e);
     printf("  square, rho auto       %.17f %.17f %+.2e\n", q.epsilon, 1.0 / 3.0, q.epsilon - 1.0 / 3.0);
     o.rho = 1.0;
@@ -85,6 +85,22 @@ static void hand_cases(void)
         }
         cd_grasp_quality_eval(k, 3, c, &o, &q, &e);
         printf("  disc 120 deg, mu %.1f   %.17f %.17f %+.2e\n", mu, q.epsilon, h, q.epsilon - h);
+    }
+    {
+        /* 3-D frictionless cube, 12 contacts: epsilon = 1/sqrt(15) */
+        cd_grasp_contact cube[12];
+        cd_grasp_options o3 = cd_grasp_options_default();
+        int ax, g, n = 0;
+        memset(cube, 0, sizeof cube);
+        for (ax = 0; ax < 3; ax++)
+            for (g = -1; g <= 1; g += 2)
+                for (j = -1; j <= 1; j += 2, n++) {
+                    cube[n].p[ax] = 0.5 * g;
+                    cube[n].p[(ax + 2) % 3] = 0.25 * j;
+                    cube[n].n[ax] = -g;
+                }
+        cd_grasp_quality_eval(cube, 12, c, &o3, &q, &e);
+        printf("  cube 3-D, frictionless %.17f %.17f %+.2e\n", q.epsilon, 1.0 / sqrt(15.0), q.epsilon - 1.0 / sqrt(15.0));
     }
     k[0] = pc(0.1, 0, -1, 0, 0.5);
     k[1] = pc(-0.1, 0, 1, 0, 0.5);

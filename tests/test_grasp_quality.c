@@ -30,6 +30,9 @@ static cd_grasp_quality eval_ok(const cd_grasp_contact *k, int n, const double c
     return q;
 }
 
+static void rot_axis(const double u0[3], double th, double R[9]);
+static void move_grasp(const double R[9], const double x[3], cd_grasp_contact *k, int n, double c[3]);
+
 static cd_grasp_options planar(void)
 {
     cd_grasp_options o = cd_grasp_options_default();
@@ -164,6 +167,64 @@ Test(grasp_quality, planar_antipodal_frictional_hand_value)
         cr_expect_eq(q.force_closure, 1);
         cr_expect(fabs(q.epsilon - want) <= 1e-9, "mu %g: epsilon %.17g, expected %.17g", mu, q.epsilon, want);
     }
+}
+
+/* ---- (a4) 3-D, frictionless: twelve contacts on a cube ---------------------- */
+/* Cube of half-width a centred at c = 0; on the face of axis i and sign g the
+ * contacts p = g a e_i + k s e_{i+2} (k = +-1, indices mod 3), n = -g e_i.
+ * r x n: face +x, p = (a, 0, k s), n = -e1 gives (0, -k s, 0); face -x gives
+ * (0, k s, 0); cyclically the wrenches are (+-e_i, +-sg e_{i+1}), all four sign
+ * pairs, sg = s/rho. They lie in three mutually orthogonal planes
+ * (f1, tau2), (f2, tau3), (f3, tau1), in each the rectangle with vertices
+ * (+-1, +-sg). The hull of such a union is the free sum of the rectangles:
+ * its facets are the hyperplanes sum_i c_i . x_i = 1 with each c_i the
+ * normal vector of a rectangle edge, (+-1, 0) or (0, +-1/sg) (4^3 = 64
+ * facets), at distance 1/|c| from the origin. For sg < 1 the nearest take
+ * (0, 1/sg) in all three planes: epsilon = sg / sqrt(3).
+ * Default rho = sqrt(a^2 + s^2); a = 1/2, s = 1/4: sg^2 = 1/5,
+ * epsilon = 1/sqrt(15). With rho = 1: sg = 1/4, epsilon = 1/(4 sqrt 3). */
+static void cube_grasp(cd_grasp_contact k[12])
+{
+    const double a = 0.5, s = 0.25;
+    int i, g, j, n = 0;
+    for (i = 0; i < 3; i++)
+        for (g = -1; g <= 1; g += 2)
+            for (j = -1; j <= 1; j += 2) {
+                memset(&k[n], 0, sizeof k[n]);
+                k[n].p[i] = g * a;
+                k[n].p[(i + 2) % 3] = j * s;
+                k[n].n[i] = -g;
+                n++;
+            }
+}
+
+Test(grasp_quality, spatial_frictionless_cube_hand_value)
+{
+    const double axis[3] = {0.6, 0.1, -0.5}, x[3] = {-3, 0.5, 8};
+    double c[3] = {0, 0, 0}, R[9];
+    cd_grasp_contact k[12];
+    cd_grasp_options o = cd_grasp_options_default();
+    cd_grasp_quality q;
+    cube_grasp(k);
+    q = eval_ok(k, 12, c, &o);
+    cr_expect_eq(q.force_closure, 1);
+    cr_expect_eq(q.dim, 6);
+    cr_expect_eq(q.nwrench, 12);
+    cr_expect_eq(q.nfacet, 64, "free sum of three rectangles: 64 facets, got %d", q.nfacet);
+    cr_expect(fabs(q.epsilon - 1.0 / sqrt(15.0)) <= 1e-9, "epsilon %.17g, expected 1/sqrt(15)", q.epsilon);
+    /* (c) exact invariance: frictionless wrenches rotate rigidly in R^6 */
+    rot_axis(axis, -1.3, R);
+    move_grasp(R, x, k, 12, c);
+    q = eval_ok(k, 12, c, &o);
+    cr_expect(fabs(q.epsilon - 1.0 / sqrt(15.0)) <= 1e-9, "moved: epsilon %.17g", q.epsilon);
+    o.rho = 1.0;
+    q = eval_ok(k, 12, c, &o);
+    cr_expect(fabs(q.epsilon - 1.0 / (4.0 * sqrt(3.0))) <= 1e-9, "rho 1: epsilon %.17g, expected 1/(4 sqrt 3)", q.epsilon);
+    /* without the two contacts on the +z face (the last two, pushing -z) no
+     * wrench has f3 < 0: no closure */
+    q = eval_ok(k, 10, c, &o);
+    cr_expect_eq(q.force_closure, 0);
+    cr_expect_eq(q.epsilon, 0.0);
 }
 
 /* ---- (b) no force closure ---------------------------------------------------- */
