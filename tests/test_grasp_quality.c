@@ -180,7 +180,8 @@ Test(grasp_quality, planar_antipodal_frictional_hand_value)
  * its facets are the hyperplanes sum_i c_i . x_i = 1 with each c_i the
  * normal vector of a rectangle edge, (+-1, 0) or (0, +-1/sg) (4^3 = 64
  * facets), at distance 1/|c| from the origin. For sg < 1 the nearest take
- * (0, 1/sg) in all three planes: epsilon = sg / sqrt(3).
+ * (0, 1/sg) in all three planes: epsilon = sg / sqrt(3); for sg > 1 the
+ * (+-1, 0): epsilon = 1 / sqrt(3).
  * Default rho = sqrt(a^2 + s^2); a = 1/2, s = 1/4: sg^2 = 1/5,
  * epsilon = 1/sqrt(15). With rho = 1: sg = 1/4, epsilon = 1/(4 sqrt 3). */
 static void cube_grasp(cd_grasp_contact k[12])
@@ -220,6 +221,17 @@ Test(grasp_quality, spatial_frictionless_cube_hand_value)
     o.rho = 1.0;
     q = eval_ok(k, 12, c, &o);
     cr_expect(fabs(q.epsilon - 1.0 / (4.0 * sqrt(3.0))) <= 1e-9, "rho 1: epsilon %.17g, expected 1/(4 sqrt 3)", q.epsilon);
+    /* sg >= 1 (torques weigh more than forces): the nearest facets take
+     * (+-1, 0) in every plane, epsilon = 1/sqrt(3); rho = 1 mm gives sg = 250.
+     * At the other end of the accepted rho range (1e6 lever arms) the tiny
+     * epsilon sg/sqrt3 keeps its relative accuracy. */
+    o.rho = 1e-3;
+    q = eval_ok(k, 12, c, &o);
+    cr_expect(fabs(q.epsilon - 1.0 / sqrt(3.0)) <= 1e-9, "rho 1 mm: epsilon %.17g, expected 1/sqrt(3)", q.epsilon);
+    o.rho = 5e5;
+    q = eval_ok(k, 12, c, &o);
+    cr_expect(fabs(q.epsilon / (0.25 / 5e5 / sqrt(3.0)) - 1.0) <= 1e-9, "rho 5e5 m: epsilon %.17g", q.epsilon);
+    o.rho = 1.0;
     /* without the two contacts on the +z face (the last two, pushing -z) no
      * wrench has f3 < 0: no closure */
     q = eval_ok(k, 10, c, &o);
@@ -449,6 +461,13 @@ Test(grasp_quality, bad_input_rejected_with_message)
     p = o;
     p.rho = -1.0;
     expect_einval(k, 4, c, &p, "grasp quality: rho = -1, expected a finite value >= 0 (0 = automatic)");
+    p = o;
+    p.rho = 1e-20; /* the cube grasp would look flat to Qhull: a false "no closure" */
+    expect_einval(k, 4, c, &p, "grasp quality: rho = 1e-20 m is out of scale with the lever arms (max |p - c| = "
+                               "0.634429 m): expected within a factor 1e+06 of it (or 0 = automatic)");
+    memcpy(b, k, sizeof k);
+    b[0].p[0] = 1.5e308, b[2].p[0] = -1.5e308;
+    expect_einval(b, 4, c, &o, "grasp quality: the lever arms |p - c| overflow (contacts too far from c)");
     p = o;
     p.cone_edges = 2;
     expect_einval(k, 4, c, &p, "grasp quality: cone_edges = 2, expected 3..64");

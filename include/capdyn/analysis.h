@@ -39,7 +39,8 @@ typedef struct {
                                default (0,0,1) */
     double rho;             /* torque scale [m]: torques are divided by rho; 0 (default)
                                = max_i |p_i - c| (in-plane distance in planar mode),
-                               1 m if every contact sits at c */
+                               1 m if every contact sits at c. A given rho must be
+                               within a factor 1e6 of max_i |p_i - c|. */
     int cone_edges;         /* 3-D mode: edges m of each linearised friction cone,
                                3..64, default 8. Planar mode always uses the two
                                in-plane edges n +- mu t. */
@@ -76,7 +77,7 @@ cd_grasp_options cd_grasp_options_default(void);
  * Returns CD_EINVAL (err names the contact and field) on n < 1, a NULL
  * pointer, a non-finite value, a zero normal (or, planar, a normal
  * perpendicular to the plane), mu < 0, a tangent parallel to its normal,
- * rho < 0, cone_edges out of range or an unknown mode; CD_ENUMERIC if Qhull
+ * rho < 0 or out of scale (above), cone_edges out of range or an unknown mode; CD_ENUMERIC if Qhull
  * fails (precision or topology error; err carries Qhull's first message
  * line); CD_ENOMEM if allocation fails. On error q->epsilon is 0 and
  * q->force_closure 0. Allocates and frees its own scratch; thread-safe

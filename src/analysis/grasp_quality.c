@@ -26,6 +26,8 @@
  * already within 3.3 % of the exact cone's (docs/grasp-quality.md). */
 enum { CONE_EDGES_MAX = 64 };
 static const double PI = 3.14159265358979323846;
+/* accepted ratio between a given rho and the largest lever arm */
+static const double RHO_RANGE = 1e6;
 
 cd_grasp_options cd_grasp_options_default(void)
 {
@@ -130,7 +132,7 @@ static void build_wrenches(const cd_grasp_contact *ct, int n, const double c[3],
     for (i = 0; i < n; i++) {
         const cd_grasp_contact *k = &ct[i];
         double r[3], nn[3], t1[3], t2[3], s;
-        for (a = 0; a < 3; a++) r[a] = k->p[a] - c[a];
+        for (a = 0; a < 3; a++) r[a] = (k->p[a] - c[a]) / rho; /* lever arm in units of rho */
         if (planar) {
             /* in-plane coordinates: r = (r.e1, r.e2), n projected and normalised, t = z x n */
             double rx = dot3(r, e1), ry = dot3(r, e2), nx = dot3(k->n, e1), ny = dot3(k->n, e2);
@@ -143,7 +145,7 @@ static void build_wrenches(const cd_grasp_contact *ct, int n, const double c[3],
                 double *wr = w + 3 * row++;
                 wr[0] = fx;
                 wr[1] = fy;
-                wr[2] = (rx * fy - ry * fx) / rho;
+                wr[2] = rx * fy - ry * fx;
             }
             continue;
         }
@@ -166,7 +168,7 @@ static void build_wrenches(const cd_grasp_contact *ct, int n, const double c[3],
             cross3(r, f, tau);
             for (a = 0; a < 3; a++) {
                 wr[a] = f[a];
-                wr[3 + a] = tau[a] / rho;
+                wr[3 + a] = tau[a];
             }
         }
     }
@@ -187,7 +189,7 @@ cd_status cd_grasp_quality_eval(const cd_grasp_contact *ct, int n, const double 
                                 cd_grasp_quality *q, cd_error *err)
 {
     cd_grasp_options o = opt ? *opt : cd_grasp_options_default();
-    double z[3] = {0.0, 0.0, 1.0}, rho, wmax = 0.0, dmin = HUGE_VAL, tol = 0.0;
+    double z[3] = {0.0, 0.0, 1.0}, rho, rmax = 0.0, wmax = 0.0, dmin = HUGE_VAL, tol = 0.0;
     double *w;
     int i, a, dim, nw = 0, exitcode, curlong, totlong, nfacet = 0;
     cd_status st;
@@ -206,17 +208,24 @@ cd_status cd_grasp_quality_eval(const cd_grasp_contact *ct, int n, const double 
     q->dim = dim;
 
     /* torque scale: given, else the largest lever arm (in-plane in planar mode) */
-    rho = o.rho;
-    if (rho == 0.0) {
-        for (i = 0; i < n; i++) {
-            double r[3], zr = 0.0;
-            for (a = 0; a < 3; a++) r[a] = ct[i].p[a] - c[a];
-            if (o.mode == CD_GRASP_PLANAR) zr = dot3(r, z);
-            for (a = 0; a < 3; a++) r[a] -= zr * z[a];
-            rho = fmax(rho, norm3(r));
-        }
-        if (rho == 0.0) rho = 1.0;
+    for (i = 0; i < n; i++) {
+        double r[3], zr = 0.0;
+        for (a = 0; a < 3; a++) r[a] = ct[i].p[a] - c[a];
+        if (o.mode == CD_GRASP_PLANAR) zr = dot3(r, z);
+        for (a = 0; a < 3; a++) r[a] -= zr * z[a];
+        rmax = fmax(rmax, norm3(r));
     }
+    if (!isfinite(rmax))
+        return seterr(err, CD_EINVAL, "grasp quality: the lever arms |p - c| overflow (contacts too far from c)"),
+               CD_EINVAL;
+    /* A rho far from the lever arms makes the wrench set a needle or a pancake
+     * in wrench space: Qhull then sees it as flat (a false "no closure"; a
+     * 12-contact cube grasp with rho = 1e-20 m does that). Refuse it. */
+    if (o.rho > 0.0 && rmax > 0.0 && (rmax > RHO_RANGE * o.rho || rmax * RHO_RANGE < o.rho))
+        return seterr(err, CD_EINVAL,
+                      "grasp quality: rho = %g m is out of scale with the lever arms (max |p - c| = %g m): expected "
+                      "within a factor %g of it (or 0 = automatic)", o.rho, rmax, RHO_RANGE), CD_EINVAL;
+    rho = o.rho > 0.0 ? o.rho : rmax > 0.0 ? rmax : 1.0;
     q->rho = rho;
     for (i = 0; i < n; i++) nw += ct[i].mu > 0.0 ? (o.mode == CD_GRASP_PLANAR ? 2 : o.cone_edges) : 1;
     q->nwrench = nw;
