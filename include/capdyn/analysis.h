@@ -69,19 +69,20 @@ cd_grasp_options cd_grasp_options_default(void);
  * (3-D; only f = n_i if mu_i = 0; planar: f = n_i +- mu_i t_i in the plane)
  * and the wrenches w_ij = (f_ij, (p_i - c) x f_ij / rho). epsilon is the
  * minimum over the hull facets of the distance from the origin to the facet
- * (computed with Qhull). opt may be NULL (defaults). q must not be NULL.
+ * (computed with Qhull). opt may be NULL (defaults); err may be NULL.
  * Returns CD_OK with q filled, including the physically right answer for a
  * degenerate wrench set (fewer than dim+1 wrenches, or wrenches whose hull
  * is flat: lower-dimensional than the wrench space): epsilon 0,
  * force_closure 0.
  * Returns CD_EINVAL (err names the contact and field) on n < 1, a NULL
- * pointer, a non-finite value, a zero normal (or, planar, a normal
+ * contacts, c or q, a non-finite value, a zero normal (or, planar, a normal
  * perpendicular to the plane), mu < 0, a tangent parallel to its normal,
- * rho < 0 or out of scale (above), cone_edges out of range or an unknown mode; CD_ENUMERIC if Qhull
- * fails (precision or topology error; err carries Qhull's first message
- * line); CD_ENOMEM if allocation fails. On error q->epsilon is 0 and
- * q->force_closure 0. Allocates and frees its own scratch; thread-safe
- * (reentrant Qhull, no global state). */
+ * rho < 0 or out of scale (above), lever arms that overflow, cone_edges out
+ * of range or an unknown mode; CD_ENUMERIC if Qhull fails (precision or
+ * topology error; err carries Qhull's first message line); CD_ENOMEM if
+ * allocation fails. On error q->epsilon is 0 and q->force_closure 0.
+ * Allocates and frees its own scratch; no global state (reentrant Qhull),
+ * so concurrent calls are safe. */
 cd_status cd_grasp_quality_eval(const cd_grasp_contact *contacts, int n, const double c[3],
                                 const cd_grasp_options *opt, cd_grasp_quality *q, cd_error *err);
 
