@@ -194,6 +194,9 @@ void cd_model_free(cd_model *m)
     free(m->act_name); free(m->act_type); free(m->act_prm); free(m->act_motor); free(m->act_tbl_adr);
     free(m->act_tbl_n); free(m->act_trn_adr); free(m->act_trn_n); free(m->trn_body); free(m->trn_ratio);
     free(m->body_act); free(m->tbl_t); free(m->tbl_v); free(m->breaks);
+    for (i = 0; i < m->nfinger; i++) free(m->finger_name[i]);
+    free(m->finger_name); free(m->finger_type); free(m->finger_jnt_adr); free(m->finger_jnt_n); free(m->fjnt_body);
+    free(m->fjnt_sync); free(m->fjnt_ratio); free(m->finger_prm); free(m->finger_tbl_adr); free(m->finger_tbl_n);
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert);
@@ -734,6 +737,78 @@ cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_
     return CD_OK;
 }
 
+cd_finger_desc cd_finger_desc_default(void)
+{
+    cd_finger_desc f;
+    memset(&f, 0, sizeof f);
+    f.type = CD_FINGER_SPACE;
+    return f;
+}
+
+int cd_model_add_finger(cd_model *m, const cd_finger_desc *f, cd_error *err)
+{
+    int id, n, i, j, ok = 0, bad;
+    const char *nm;
+    FROZEN_CHECK(-1);
+    if (!f) { seterr(err, CD_EINVAL, "finger: description is NULL"); return -1; }
+    nm = f->name ? f->name : "";
+    if (f->type < 0 || f->type >= CD_FINGER_NTYPES) { seterr(err, CD_EINVAL, "finger '%s': unknown type", nm); return -1; }
+    if (f->njoint < 1 || !f->joint_body) { seterr(err, CD_EINVAL, "finger '%s': needs at least one joint", nm); return -1; }
+    for (i = 0; i < f->njoint; i++) {
+        if (!is_joint(m, f->joint_body[i])) {
+            seterr(err, CD_EINVAL, "finger '%s': joint %d (body %d) is not a joint body", nm, i, f->joint_body[i]);
+            return -1;
+        }
+        for (j = 0; j < i; j++)
+            if (f->joint_body[j] == f->joint_body[i]) { seterr(err, CD_EINVAL, "finger '%s': a joint appears twice", nm); return -1; }
+        if ((f->sync && !isfinite(f->sync[i])) || (f->ratio && !isfinite(f->ratio[i]))) {
+            seterr(err, CD_EINVAL, "finger '%s': non-finite sync gain or ratio", nm);
+            return -1;
+        }
+    }
+    if (!(f->wire_K > 0) || !isfinite(f->wire_K) || !(f->wire_D >= 0) || !isfinite(f->wire_D) || !(f->threshold > 0) ||
+        !isfinite(f->threshold) || !isfinite(f->grasp_torque) || !(f->torque_limit >= 0) || !isfinite(f->torque_limit) ||
+        !(f->open_at >= 0) || !isfinite(f->open_at)) {
+        seterr(err, CD_EINVAL, "finger '%s': needs wire_K > 0, wire_D >= 0, threshold > 0, torque_limit >= 0, open_at >= 0, all finite", nm);
+        return -1;
+    }
+    if (!f->sched_t || !f->sched_q || f->nsched < 1) { seterr(err, CD_EINVAL, "finger '%s': needs a closing schedule", nm); return -1; }
+    if ((bad = rows_ok(f->sched_t, f->sched_q, f->nsched)) >= 0) {
+        seterr(err, CD_EINVAL, "finger '%s': schedule row %d: times must be finite and strictly increasing", nm, bad);
+        return -1;
+    }
+    id = m->nfinger;
+    n = id + 1;
+    ok |= RS(m->finger_name, n); ok |= RS(m->finger_type, n); ok |= RS(m->finger_jnt_adr, n); ok |= RS(m->finger_jnt_n, n);
+    ok |= RS(m->finger_prm, 6 * n); ok |= RS(m->finger_tbl_adr, n); ok |= RS(m->finger_tbl_n, n);
+    ok |= RS(m->fjnt_body, m->nfjnt + f->njoint); ok |= RS(m->fjnt_sync, m->nfjnt + f->njoint);
+    ok |= RS(m->fjnt_ratio, m->nfjnt + f->njoint);
+    if (ok) { seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_name[id] = dupstr(f->name);
+    if (!m->finger_name[id]) { seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_tbl_adr[id] = add_rows(m, f->sched_t, f->sched_q, f->nsched);
+    if (m->finger_tbl_adr[id] < 0) { free(m->finger_name[id]); seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_tbl_n[id] = f->nsched;
+    m->finger_type[id] = f->type;
+    m->finger_jnt_adr[id] = m->nfjnt;
+    m->finger_jnt_n[id] = f->njoint;
+    for (i = 0; i < f->njoint; i++) {
+        double r = (double)(f->njoint - i);
+        m->fjnt_body[m->nfjnt + i] = f->joint_body[i];
+        m->fjnt_sync[m->nfjnt + i] = f->sync ? f->sync[i] : 1.0;
+        m->fjnt_ratio[m->nfjnt + i] = f->ratio ? f->ratio[i] : r * r; /* quadratic from the tip (1) to the base (n^2) */
+    }
+    m->nfjnt += f->njoint;
+    m->finger_prm[6 * id] = f->wire_K;
+    m->finger_prm[6 * id + 1] = f->wire_D;
+    m->finger_prm[6 * id + 2] = f->threshold;
+    m->finger_prm[6 * id + 3] = f->grasp_torque;
+    m->finger_prm[6 * id + 4] = f->torque_limit;
+    m->finger_prm[6 * id + 5] = f->open_at;
+    m->nfinger++;
+    return id;
+}
+
 cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_error *err)
 {
     const char *nm;
@@ -933,6 +1008,8 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
     }
     for (a = 0; a < m->nu; a++)
         for (i = 0; i < m->act_tbl_n[a]; i++) m->breaks[nb++] = m->tbl_t[m->act_tbl_adr[a] + i];
+    for (a = 0; a < m->nfinger; a++)
+        for (i = 0; i < m->finger_tbl_n[a]; i++) m->breaks[nb++] = m->tbl_t[m->finger_tbl_adr[a] + i];
     qsort(m->breaks, (size_t)nb, sizeof(double), cmp_double);
     for (i = 0, a = 0; i < nb; i++)
         if (a == 0 || m->breaks[i] != m->breaks[a - 1]) m->breaks[a++] = m->breaks[i];
@@ -1117,7 +1194,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     m->ny_slot_adr = ny;
     m->ny_fric_adr = ny + 3 * nslot;
     m->ny = m->ny_fric_adr + m->nfric;
-    m->nsw = nslot + m->nlim + m->nfric + m->nuser;
+    m->nsw = nslot + m->nlim + m->nfric + m->nfinger + m->nuser;
     m->finalized = 1;
     return CD_OK;
 }
