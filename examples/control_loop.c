@@ -24,7 +24,8 @@
  *    bit-identical to the first run's;
  *  - hard real time: no cd_step call spends more right-hand-side evaluations
  *    than opt.max_evals, and nothing is allocated after start-up (every byte
- *    of the data comes from a fixed static arena, through cd_data_create_ex).
+ *    of the data comes from a fixed static arena, through cd_data_create_ex);
+ *  - a step whose command did not change costs 4 evaluations (sim.h).
  *
  * Build (the Makefile does this for every example):
  *   cc -std=c99 -Iinclude examples/control_loop.c build/libcapdyn.a \
@@ -46,6 +47,7 @@
 #define JOINT_TOL 1e-4       /* final joint error [rad] and rate [rad/s] */
 #define MOMENTUM_TOL 1e-9    /* relative momentum drift */
 #define ARENA_BYTES (64 * 1024)
+#define HOLD_STEPS 100       /* steps with the command held, at the end */
 
 /* ---- a static arena: all the memory of the simulation data ----------------
  * A bump allocator over a fixed buffer. cd_data_create_ex takes its memory
@@ -292,6 +294,8 @@ int main(void)
     const double wn = 2 * 3.14159265358979323846 * 1.5; /* 1.5 Hz closed-loop bandwidth */
     const long n_steps = (long)(T_END * RATE_HZ + 0.5), k_ckpt = (long)(T_CKPT * RATE_HZ + 0.5);
     long nalloc_startup, nalloc_data;
+    double evals_new, evals_held = 0;
+    cd_status st_hold = CD_OK;
     size_t nstate;
     clock_t c0, c1;
     int j, fails = 0;
@@ -346,6 +350,7 @@ int main(void)
         cd_data_free(d); cd_model_free(m); return 1;
     }
     c1 = clock();
+    evals_new = (double)d->stats.nrhs / (double)ls.ncalls;
     cd_state_get(m, d, fin1);
     cd_kinematics(m, d);
     cd_momentum(m, d, 0, NULL, P1, L1, NULL, NULL);
@@ -385,6 +390,16 @@ int main(void)
     cd_state_get(m, d, fin2);
     printf("rerun to t = %.3f s: final state (%lu doubles) %s\n", d->t, (unsigned long)nstate,
            memcmp(fin1, fin2, nstate * sizeof(double)) == 0 ? "bit-identical" : "DIFFERS");
+    /* ---- the cost of a step whose input did not change: hold the last
+     * command for HOLD_STEPS more ticks (sim.h: 4 evaluations, the previous
+     * step's end evaluation serving as the first stage) ---- */
+    {
+        long n0 = d->stats.nrhs, k;
+        for (k = 0; k < HOLD_STEPS && st_hold == CD_OK; k++) st_hold = cd_step(m, d, 1.0 / RATE_HZ, &err);
+        evals_held = (double)(d->stats.nrhs - n0) / HOLD_STEPS;
+        printf("  command held for %d more steps: %.2f evaluations per step (a new command each tick: %.2f)\n",
+               HOLD_STEPS, evals_held, evals_new);
+    }
     printf("  memory: %lu of %lu arena bytes; blocks taken at start-up %ld (data %ld, state buffers 3), after it %ld\n",
            (unsigned long)ar.used, (unsigned long)ar.cap, nalloc_startup, nalloc_data, ar.nalloc - nalloc_startup);
     printf("  CPU time: %.1f us per step (this machine; the budget is 1000 us)\n",
@@ -396,6 +411,7 @@ int main(void)
     if (memcmp(fin1, fin2, nstate * sizeof(double)) != 0) { fprintf(stderr, "FAIL: rollback not bit-identical\n"); fails++; }
     if (ls.max_evals_call > MAX_EVALS) { fprintf(stderr, "FAIL: evaluation budget exceeded\n"); fails++; }
     if (ar.nalloc != nalloc_startup) { fprintf(stderr, "FAIL: allocation after start-up\n"); fails++; }
+    if (st_hold != CD_OK || evals_held != 4.0) { fprintf(stderr, "FAIL: a step with the command held must cost 4 evaluations\n"); fails++; }
 
     cd_data_free(d);   /* gives its blocks back to the arena (a no-op here) */
     cd_model_free(m);
