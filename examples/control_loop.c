@@ -43,7 +43,7 @@
 #define T_MOVE 2.0           /* duration of the reference motion [s] */
 #define T_END 5.0            /* end of the run [s] */
 #define T_CKPT 2.5           /* where the checkpoint is taken [s] */
-#define MAX_EVALS 16         /* evaluation budget of one cd_step call (see main) */
+#define MAX_EVALS 20         /* evaluation budget of one cd_step call (see main) */
 #define JOINT_TOL 1e-4       /* final joint error [rad] and rate [rad/s] */
 #define MOMENTUM_TOL 1e-9    /* relative momentum drift */
 #define ARENA_BYTES (64 * 1024)
@@ -328,7 +328,8 @@ int main(void)
      * evaluation serves as the next first stage) and 5 when the command
      * changed (the first stage is evaluated again with the new input); the
      * rest is head-room for locating an event (none in this model: no
-     * contacts, no joint stops). cd_step refuses budgets below 4 + 6. */
+     * contacts, no joint stops). cd_step refuses budgets below 20 (the
+     * re-check of a changed input, the step, and an event's location reserve). */
     d->opt.max_evals = MAX_EVALS;
     nalloc_data = ar.nalloc;
 

@@ -7,7 +7,10 @@
  * finalized model and keeps no pointer to it: pass the model to every call.
  * All of its memory is one block taken at cd_data_create (from the caller's
  * allocator if one is given), except GSL's own stepper objects, which GSL
- * allocates itself. This header sits below dynamics, contact and the
+ * allocates itself. After creation nothing allocates except: the implicit
+ * steppers rk4imp and msbdf (inside GSL), cd_state_copy (one temporary
+ * buffer) and cd_data_reset with opt.equilibrium_start (the settle's work
+ * space), both through the data's allocator. This header sits below dynamics, contact and the
  * integrator: it knows the layout, not the physics. */
 #ifndef CAPDYN_DATA_H
 #define CAPDYN_DATA_H

@@ -128,11 +128,14 @@ cd_options cd_options_default(void);
 cd_status cd_options_check(const cd_options *o, cd_error *err);
 
 /* ---- contact law ---------------------------------------------------------- */
-/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3), never pulling.
- * Tangential: stick  f_t = -(K_t z + D_t v_t)       (paper eq. 4, linear)
+/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3); no pull by
+ *             default, or plain Kelvin-Voigt (`pull`) until x returns to 0.
+ * Tangential: stick  f_t = -(K_t z^pt + D_t v_t^qt) (paper eq. 4, signed
+ *                    vector powers; pt = qt = 1: linear)
  *             slip   |f_t| = mu_k f_n against slip   (paper eq. 5)
  * stick -> slip when |f_t| > mu_s f_n; slip -> stick when the slip velocity
- * reverses. See docs/contact.md. */
+ * reverses. No friction while a `pull` contact is in tension (f_n < 0).
+ * p >= 1, q > 0, pt >= 1, qt > 0. See docs/contact.md. */
 typedef struct {
     double K, D, p, q;    /* [N/m^p], [N (s/m)^q], exponents (>= 1) */
     double Kt, Dt;        /* [N/m^pt], [N (s/m)^qt] tangential stick spring-damper */

@@ -1046,7 +1046,8 @@ struct Builder {
         std::vector<double> tt, tv;
         double one = 1.0;
         actuator_law(node, revolute, {}, a, tt, tv, t);
-        a.name = m->body_name[body];
+        std::string aname = std::string(m->sys_name[m->body_sys[body]]) + "/" + m->body_name[body];
+        a.name = aname.c_str();
         a.ntrn = 1;
         a.trn_body = &body;
         a.trn_ratio = &one;
@@ -1099,7 +1100,7 @@ struct Builder {
     }
 
     /* a link's passive elements, stop law and prescribed motion */
-    void joint_props(const Tab &t, int id, bool rev, const double *lim, double q0)
+    void joint_props(const Tab &t, int id, bool rev, const double *lim)
     {
         cd_joint_props p = cd_joint_props_default();
         bool any = false;
@@ -1162,7 +1163,6 @@ struct Builder {
             }
             any = true;
         }
-        (void)q0;
         if (any && cd_model_set_joint(m.get(), id, &p, &err) != CD_OK) builder_fail(t.n->loc, t.path);
     }
 
@@ -1246,7 +1246,7 @@ struct Builder {
         checkpoints(t, s.bodies.back());
         shapes(t, s, id);
         if (Entry *e = t.get("actuator")) actuator(*e->val, t.kp("actuator"), id, rev);
-        joint_props(t, id, rev, has_lim ? lim : nullptr, q0u);
+        joint_props(t, id, rev, has_lim ? lim : nullptr);
     }
 
     /* [[system]] (is_target = false) or the [[target]] sugar */

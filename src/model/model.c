@@ -921,7 +921,7 @@ static double subtree_axis_inertia(const cd_model *m, int b)
     double *R = NULL, *x = NULL, I = 0, ax[3];
     R = malloc((size_t)(end - b) * 9 * sizeof(double));
     x = malloc((size_t)(end - b) * 3 * sizeof(double));
-    if (!R || !x) { free(R); free(x); return 0; }
+    if (!R || !x) { free(R); free(x); return -1.0; } /* out of memory: finalize reports it */
     /* frames relative to b's joint frame at q = q0 */
     cd_m3_identity(R);
     cd_v3_zero(x);
@@ -974,6 +974,7 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
         if (m->body_parent[b] < 0) continue;
         if (m->body_lim_id[b] >= 0) {
             double *L = m->body_limit + 6 * b, Ia = subtree_axis_inertia(m, b);
+            if (Ia < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
             if (m->body_q0[b] < L[0] || m->body_q0[b] > L[1]) {
                 seterr(err, CD_EINVAL, "joint '%s': initial position %g is outside its limits [%g, %g]", m->body_name[b],
                        m->body_q0[b], L[0], L[1]);
@@ -988,7 +989,11 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
         if (m->body_fric[3 * b] > 0) {
             double *F = m->body_fric + 3 * b;
             if (F[1] == 0) F[1] = F[0] / 1e-4;
-            if (F[2] == 0) F[2] = 2.0 * sqrt(F[1] * subtree_axis_inertia(m, b));
+            if (F[2] == 0) {
+                double Ia = subtree_axis_inertia(m, b);
+                if (Ia < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+                F[2] = 2.0 * sqrt(F[1] * Ia);
+            }
             m->body_fric_id[b] = nf++;
         } else {
             m->body_fric_id[b] = -1;

@@ -52,6 +52,10 @@
  * fixed-step mode, the rest of the step (one RK4 step from the event with
  * its end evaluation: 4). */
 #define CD_BUDGET_RESERVE 10
+/* The least budget a fixed step can keep to: the re-check after a changed
+ * input (settle_modes: <= 5), the step (4), the located event's bracket start
+ * (1) and the reserve. Breakpoints inside the step split it (4 more each). */
+#define CD_STEP_MIN_EVALS (5 + 4 + 1 + CD_BUDGET_RESERVE)
 
 typedef struct {
     const cd_model *m;        /* set for the duration of one call only: the data keeps no model pointer */
@@ -739,9 +743,11 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
         cd_error_set(err, CD_EINVAL, "cd_step: h must be positive and finite, got %g", h);
         return CD_EINVAL;
     }
-    if (I->fixed && d->opt.max_evals > 0 && d->opt.max_evals < 4 + CD_BUDGET_RESERVE) {
-        cd_error_set(err, CD_EBUDGET, "cd_step: max_evals %ld cannot cover one RK4 step and its event reserve (%d)",
-                     d->opt.max_evals, 4 + CD_BUDGET_RESERVE);
+    if (I->fixed && d->opt.max_evals > 0 && d->opt.max_evals < CD_STEP_MIN_EVALS) {
+        cd_error_set(err, CD_EBUDGET,
+                     "cd_step: max_evals %ld cannot cover a fixed step with an event (at least %d: the re-check of a "
+                     "changed input 5, the step 4, the event's bracket start 1 and reserve %d)",
+                     d->opt.max_evals, CD_STEP_MIN_EVALS, CD_BUDGET_RESERVE);
         return CD_EBUDGET;
     }
     /* the time grid: a new origin where h changes or the caller moved t */

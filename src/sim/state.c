@@ -113,7 +113,7 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
 
 cd_status cd_state_copy(const cd_model *m, cd_data *dst, cd_data *src, cd_error *err)
 {
-    /* through dst's integrator scratch would need a buffer: use the event ring? no: a direct copy */
+    /* one temporary buffer from dst's allocator (documented: this call allocates) */
     size_t n = cd_state_size(m);
     double *tmp = dst->allocator.alloc(n * sizeof(double), dst->allocator.ctx);
     cd_status st;
