@@ -348,10 +348,11 @@ Test(scenario_reject, table_times_not_increasing)
                 SUBS("bad_table_time.toml:12:65: key 'system[0].link[0].actuator.table[2]'", "strictly increasing"));
 }
 
-Test(scenario_reject, gripper_type_not_implemented)
+Test(scenario_reject, gripper_mechanism_needs_its_fingers)
 {
+    /* a mechanism gripper builds its hand: the finger links must be given */
     expect_fail("bad_gripper.toml", CD_EINVAL,
-                SUBS("bad_gripper.toml:5:8: key 'gripper.type': expected 'torque', got 'tako'"));
+                SUBS("bad_gripper.toml:4:1: key 'gripper.links': missing required key (expected an array of link lengths [m]"));
 }
 
 Test(scenario_reject, duplicate_system_name)

@@ -24,6 +24,9 @@ typedef struct {
     double output_dt;      /* sample interval of the results [s] */
     double flush_every;    /* wall-clock seconds between HDF5 flushes */
     int event_capacity;    /* event log ring size for cd_data_create */
+    int capture_hand;      /* system of the [gripper]'s hand, -1 if none */
+    int capture_object;    /* the object it is to capture ([capture] object, or the first [[target]]), -1 */
+    double capture_v_max, capture_w_max, capture_dwell, capture_workspace; /* [capture] (verdict.h) */
 } cd_scenario;
 
 /* Loads, validates and builds a scenario. overrides are "key.path=value"

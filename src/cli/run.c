@@ -8,6 +8,7 @@
  * stops the run when SIGINT/SIGTERM set the flag. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "capdyn/verdict.h"
 
 #include <math.h>
 #include <signal.h>
@@ -209,6 +210,8 @@ int cmd_run(int argc, char **argv)
     cd_h5_writer *w;
     cd_error err, werr;
     cd_status st = CD_OK, cst;
+    cd_monitor mon;
+    int have_mon = 0;
     run_ctx ctx;
     char outbuf[1024], msg[768], wmsg[512];
     const char *out;
@@ -300,6 +303,23 @@ int cmd_run(int argc, char **argv)
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
+    /* the capture verdict, when the scenario has a gripper and an object */
+    have_mon = sc->capture_hand >= 0 && sc->capture_object >= 0;
+    if (have_mon) {
+        cd_monitor_opts mop = cd_monitor_opts_default();
+        mop.hand = sc->capture_hand;
+        mop.object = sc->capture_object;
+        mop.v_max = sc->capture_v_max;
+        mop.w_max = sc->capture_w_max;
+        mop.dwell = sc->capture_dwell;
+        mop.workspace = sc->capture_workspace;
+        if (cd_monitor_init(&mon, m, d, &mop, &err) != CD_OK) {
+            cli_error("%s", err.msg);
+            have_mon = 0;
+        } else {
+            cd_monitor_update(&mon, m, d);
+        }
+    }
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, &ctx);
 
@@ -320,6 +340,7 @@ int cmd_run(int argc, char **argv)
         if (st != CD_OK) break;
         st = cd_h5_append(w, m, d, &werr);
         if (st != CD_OK) { err = werr; break; }
+        if (have_mon) cd_monitor_update(&mon, m, d);
         t_last_sample = d->t;
         if (cli_wall() - last_flush >= sc->flush_every) {
             st = cd_h5_flush(w, &werr);
@@ -363,6 +384,16 @@ int cmd_run(int argc, char **argv)
             x.ft_max = ctx.ft_max;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
+            if (have_mon) {
+                printf("capture     %s", cd_verdict_name(mon.verdict));
+                if (mon.verdict == CD_VERDICT_CAPTURED) printf(" at t = %.6g s", mon.t_capture);
+                if (mon.verdict == CD_VERDICT_ESCAPED) printf(" at t = %.6g s", mon.t_escape);
+                printf(": object '%s' in hand '%s'\n", m->sys_name[mon.opt.object], m->sys_name[mon.opt.hand]);
+                printf("            peak contact force %.6g N, peak joint torque %.6g N m; at the end: %d contacts "
+                       "(%d stick, %d slip), offset from the palm %.6g m, %s, relative speed %.3g m/s, %.3g rad/s\n",
+                       mon.peak_fn, mon.peak_tau, mon.n_stick + mon.n_slip, mon.n_stick, mon.n_slip, mon.offset_norm,
+                       mon.enclosed ? "enclosed" : "not enclosed", mon.v_rel, mon.w_rel);
+            }
         } else {
             cli_error("reading back '%s': %s", out, rerr.msg);
         }

@@ -862,6 +862,7 @@ struct BodyInfo {
 struct SysInfo {
     std::string name;
     int id;
+    bool is_target = false;
     Loc loc;
     std::string path;
     std::vector<BodyInfo> bodies;  /* base first (named "base" here) */
@@ -1249,6 +1250,212 @@ struct Builder {
         joint_props(t, id, rev, has_lim ? lim : nullptr);
     }
 
+    /* [gripper] of a mechanism type: generates the hand (a fixed palm box and
+     * fingers of capsule links with check points along them), its drive
+     * (actuators or clutched fingers) and the pairs of its check points with
+     * every target's shapes. docs/grippers.md. */
+    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def)
+    {
+        std::string name = "hand";
+        if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
+        if (find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
+        std::string preset = "two_opposed";
+        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120"});
+        int nf = preset == "two_opposed" ? 2 : 3;
+        /* palm */
+        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0};
+        if (Entry *e = t.get("palm")) {
+            std::string pp = t.kp("palm");
+            Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position"});
+            pt.vec("size", 3, psize, Range::Pos);
+            pmass = pt.num("mass", pmass, Range::Pos);
+            pt.vec("position", 3, ppos);
+        }
+        /* fingers */
+        std::vector<double> L, M;
+        {
+            const Node &ln = t.need("links", "an array of link lengths [m], base to tip");
+            if (ln.kind != NK::Array || ln.arr.empty() || ln.arr.size() > 16)
+                fail_at(ln.loc, t.kp("links"), "expected 1 to 16 link lengths [m], got " + render(ln));
+            for (size_t i = 0; i < ln.arr.size(); i++) L.push_back(num_of(*ln.arr[i], idx(t.kp("links"), i), Range::Pos));
+        }
+        if (Entry *e = t.get("masses")) {
+            if (e->val->kind != NK::Array || e->val->arr.size() != L.size())
+                fail_at(e->val->loc, t.kp("masses"), "expected " + std::to_string(L.size()) + " masses (one per link), got " + render(*e->val));
+            for (size_t i = 0; i < L.size(); i++) M.push_back(num_of(*e->val->arr[i], idx(t.kp("masses"), i), Range::Pos));
+        } else {
+            for (double l : L) M.push_back(0.6 * l); /* ~ an aluminium tube: 0.6 kg/m */
+        }
+        double rad = t.num("radius", 0.008, Range::Pos);
+        double spacing = t.num("spacing", 0.1, Range::Pos);
+        double cps = t.num("checkpoint_spacing", rad, Range::Pos);
+        double total = 0;
+        for (double l : L) total += l;
+        /* the hand system */
+        cd_system_desc sd = cd_system_desc_default();
+        sd.name = name.c_str();
+        sd.type = CD_BASE_FIXED;
+        sd.mass = pmass;
+        sd.inertia[0] = pmass * (psize[1] * psize[1] + psize[2] * psize[2]) / 12.0;
+        sd.inertia[4] = pmass * (psize[0] * psize[0] + psize[2] * psize[2]) / 12.0;
+        sd.inertia[8] = pmass * (psize[0] * psize[0] + psize[1] * psize[1]) / 12.0;
+        for (int k = 0; k < 3; k++) sd.pos[k] = ppos[k];
+        SysInfo S;
+        S.name = name;
+        S.loc = t.n->loc;
+        S.path = t.path;
+        S.id = cd_model_add_system(m.get(), &sd, &err);
+        if (S.id < 0) builder_fail(t.n->loc, t.path);
+        S.bodies.push_back(BodyInfo{"base", m->sys_body_adr[S.id], 0});
+        double half[3] = {psize[0] / 2, psize[1] / 2, psize[2] / 2}, z3[3] = {0, 0, 0};
+        int palm_shape = cd_model_add_shape(m.get(), S.bodies[0].id, CD_SHAPE_BOX, z3, nullptr, half, nullptr, 0, &err);
+        if (palm_shape < 0) builder_fail(t.n->loc, t.path);
+        S.shapes.push_back({"palm", palm_shape});
+        /* palm-face check points, tops flush with the face y = +size_y/2 */
+        for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
+            double p[3] = {x, half[1] - rad, 0};
+            if (cd_model_add_checkpoint(m.get(), S.bodies[0].id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
+            S.bodies[0].ncp++;
+        }
+        std::vector<std::vector<int>> fingers(nf);
+        for (int f = 0; f < nf; f++) {
+            double phi = preset == "two_opposed" ? (f == 0 ? M_PI : 0.0) : M_PI / 2 + 2 * M_PI * f / 3.0;
+            double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {er[2] * 0 - 0 * 1, 0, er[0] * 1}; /* e_r x y */
+            ax[0] = -er[2];
+            ax[1] = 0;
+            ax[2] = er[0];
+            int parent = S.bodies[0].id;
+            for (size_t j = 0; j < L.size(); j++) {
+                cd_link_desc d = cd_link_desc_default();
+                std::string ln = "f" + std::to_string(f) + "_l" + std::to_string(j);
+                d.name = ln.c_str();
+                d.parent = parent;
+                if (j == 0) { d.pos[0] = er[0] * spacing / 2; d.pos[1] = half[1]; d.pos[2] = er[2] * spacing / 2; }
+                else d.pos[1] = L[j - 1];
+                cd_v3_copy(d.axis, ax);
+                d.mass = M[j];
+                d.com[1] = L[j] / 2;
+                double It = M[j] * (3 * rad * rad + L[j] * L[j]) / 12.0, Ia = M[j] * rad * rad / 2;
+                memset(d.inertia, 0, sizeof d.inertia);
+                d.inertia[0] = It; d.inertia[4] = Ia; d.inertia[8] = It;
+                int id = cd_model_add_link(m.get(), S.id, &d, &err);
+                if (id < 0) builder_fail(t.n->loc, t.path);
+                S.bodies.push_back(BodyInfo{ln, id, 0});
+                double R[9], spos[3] = {0, L[j] / 2, 0}, ssz[3] = {rad, L[j] / 2, 0};
+                cd_m3_from_rpy(R, -M_PI / 2, 0, 0);
+                int sh = cd_model_add_shape(m.get(), id, CD_SHAPE_CAPSULE, spos, R, ssz, nullptr, 0, &err);
+                if (sh < 0) builder_fail(t.n->loc, t.path);
+                S.shapes.push_back({ln, sh});
+                for (double y = cps; y <= L[j] + 1e-12; y += cps) {
+                    double p[3] = {0, y, 0};
+                    if (cd_model_add_checkpoint(m.get(), id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
+                    S.bodies.back().ncp++;
+                }
+                fingers[f].push_back(id);
+                parent = id;
+            }
+        }
+        sys.push_back(S);
+        /* the drive */
+        double T = t.num("torque", 0.2, Range::Any), open_at = t.num("open_at", 0.0, Range::NonNeg);
+        double ctime = 1.0, cangle = 120.0 * DEG, cstart = 0.0;
+        if (Entry *e = t.get("close")) {
+            std::string cp = t.kp("close");
+            Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start"});
+            ctime = ct.num("time", ctime, Range::Pos);
+            cangle = ct.num("angle_deg", 120.0, Range::Pos) * DEG;
+            cstart = ct.num("start", 0.0, Range::NonNeg);
+        }
+        if (open_at > 0 && open_at <= cstart + ctime)
+            fail_at(t.get("open_at")->val->loc, t.kp("open_at"), "expected open_at after the closing ends (" + fmt_num(cstart + ctime) + " s)");
+        std::vector<double> ratio;
+        size_t n = L.size();
+        if (Entry *e = t.get("ratios")) {
+            if (e->val->kind != NK::Array || e->val->arr.size() != n)
+                fail_at(e->val->loc, t.kp("ratios"), "expected " + std::to_string(n) + " ratios (base to tip), got " + render(*e->val));
+            for (size_t i = 0; i < n; i++) ratio.push_back(num_of(*e->val->arr[i], idx(t.kp("ratios"), i), Range::Pos));
+        } else {
+            for (size_t j = 0; j < n; j++) ratio.push_back((double)((n - j) * (n - j))); /* quadratic, tip 1 */
+        }
+        double Ts = 0, w0 = 0;
+        if (Entry *e = t.get("motor")) {
+            std::string mp = t.kp("motor");
+            Tab mt(table_of(*e->val, mp), mp, {"stall_torque", "noload_speed"});
+            Ts = mt.need_num("stall_torque", Range::Pos);
+            w0 = mt.need_num("noload_speed", Range::Pos);
+        }
+        if (ty == "soft" || ty == "tako") {
+            if (t.get("clutch")) fail_at(t.get("clutch")->kloc, t.kp("clutch"), "applies to 'space' and 'torque_switch' grippers only");
+            std::vector<double> st = {cstart}, sv = {T};
+            if (open_at > 0) { st.push_back(open_at); sv.push_back(-T); }
+            std::vector<int> jb;
+            std::vector<double> jr;
+            for (int f = 0; f < nf; f++) {
+                if (ty == "soft") { jb.clear(); jr.clear(); }
+                for (size_t j = 0; j < n; j++) { jb.push_back(fingers[f][j]); jr.push_back(ratio[j]); }
+                if (ty == "soft" || f == nf - 1) {
+                    cd_actuator_desc a = cd_actuator_desc_default();
+                    std::string an = name + (ty == "soft" ? "/f" + std::to_string(f) + "_motor" : "/motor");
+                    a.name = an.c_str();
+                    a.type = CD_ACT_STEPS;
+                    a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
+                    if (cstart > 0) { /* no torque before the closing starts */
+                        st.insert(st.begin(), 0.0); sv.insert(sv.begin(), 0.0);
+                        a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
+                    }
+                    a.ntrn = (int)jb.size(); a.trn_body = jb.data(); a.trn_ratio = jr.data();
+                    a.stall_torque = Ts; a.noload_speed = w0;
+                    if (cd_model_add_actuator(m.get(), &a, &err) < 0) builder_fail(t.n->loc, t.path);
+                    if (cstart > 0) { st.erase(st.begin()); sv.erase(sv.begin()); }
+                }
+            }
+        } else {
+            double thr = 0.05, Kw = 20.0, Dw = -1, lim = 0;
+            if (Entry *e = t.get("clutch")) {
+                std::string cp = t.kp("clutch");
+                Tab ct(table_of(*e->val, cp), cp, {"threshold", "wire_stiffness", "wire_damping", "torque_limit"});
+                thr = ct.num("threshold", thr, Range::Pos);
+                Kw = ct.num("wire_stiffness", Kw, Range::Pos);
+                Dw = ct.num("wire_damping", -1, Range::NonNeg);
+                lim = ct.num("torque_limit", 0.0, Range::NonNeg);
+            }
+            if (Ts > 0 && lim == 0) lim = Ts; /* the motor's stall torque limits the coupling */
+            std::vector<double> st = {0.0}, sq = {0.0};
+            if (cstart > 0) { st.push_back(cstart); sq.push_back(0.0); }
+            st.push_back(cstart + ctime); sq.push_back(cangle);
+            if (open_at > 0) { st.push_back(open_at); sq.push_back(cangle); st.push_back(open_at + ctime); sq.push_back(0.0); }
+            for (int f = 0; f < nf; f++) {
+                cd_finger_desc fd = cd_finger_desc_default();
+                std::string fname = name + "/f" + std::to_string(f);
+                /* the default wire damping: critical for the finger's links about the base joint */
+                double I = 0, arm = 0;
+                for (size_t j = 0; j < n; j++) { I += M[j] * (arm + L[j] / 2) * (arm + L[j] / 2); arm += L[j]; }
+                fd.name = fname.c_str();
+                fd.type = ty == "space" ? CD_FINGER_SPACE : CD_FINGER_TORQUE_SWITCH;
+                fd.njoint = (int)n;
+                fd.joint_body = fingers[f].data();
+                fd.ratio = ratio.data();
+                fd.wire_K = Kw;
+                fd.wire_D = Dw >= 0 ? Dw : 2.0 * sqrt(Kw * I);
+                fd.threshold = thr;
+                fd.grasp_torque = T;
+                fd.torque_limit = lim;
+                fd.sched_t = st.data(); fd.sched_q = sq.data(); fd.nsched = (int)st.size();
+                fd.open_at = open_at;
+                if (cd_model_add_finger(m.get(), &fd, &err) < 0) builder_fail(t.n->loc, t.path);
+            }
+        }
+        /* pairs: the hand's check points against every target shape */
+        int lid = cd_model_add_law(m.get(), &def.law, &err);
+        if (lid < 0) builder_fail(t.n->loc, t.path);
+        for (auto &s2 : sys) {
+            if (!s2.is_target) continue;
+            for (auto &sh : s2.shapes)
+                if (cd_model_add_pair(m.get(), S.id, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+        }
+        (void)total;
+    }
+
     /* [[system]] (is_target = false) or the [[target]] sugar */
     void system(Node &node, const std::string &path, bool is_target)
     {
@@ -1261,6 +1468,7 @@ struct Builder {
         }
         Tab t(&node, path, keys);
         SysInfo s;
+        s.is_target = is_target;
         s.name = name_of_node(t.need("name", "a name"), t.kp("name"));
         s.loc = node.loc;
         s.path = path;
@@ -1448,13 +1656,16 @@ struct Builder {
         std::string title;
         double duration = 0, output_dt = 0, flush_every = 1.0;
         int event_capacity = 4096;
+        int hand = -1, object = -1;
+        double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
     };
 
     void build(Node &root, Run &run, const std::string &path)
     {
         m.reset(cd_model_create());
         if (!m) throw std::bad_alloc();
-        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator"});
+        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator",
+                            "capture"});
         if (Entry *e = top.get("include"))
             fail_at(e->kloc, "include", "expected 'include' only at the top of a file, got it from an override");
 
@@ -1544,19 +1755,49 @@ struct Builder {
 
         /* [gripper] */
         if (Entry *e = top.get("gripper")) {
-            Tab t(table_of(*e->val, "gripper"), "gripper", {"type", "system"});
-            const Node &tn = t.need("type", "'torque'");
-            std::string ty = str_of(tn, t.kp("type"));
-            if (ty == "soft_gripper" || ty == "tako" || ty == "space_gripper")
-                fail_at(tn.loc, t.kp("type"), "expected 'torque', got '" + ty + "' (reserved for a later version of capdyn)");
-            choice_of(tn, t.kp("type"), {"torque"});
-            if (Entry *g = t.get("system")) {
-                std::string gs = str_of(*g->val, t.kp("system"));
-                if (!find_sys(gs))
-                    fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+            Tab t(table_of(*e->val, "gripper"), "gripper",
+                  {"type", "system", "name", "hand", "palm", "links", "masses", "radius", "spacing", "checkpoint_spacing",
+                   "close", "torque", "open_at", "ratios", "motor", "clutch"});
+            const Node &tn = t.need("type", "one of 'torque', 'soft', 'tako', 'space', 'torque_switch'");
+            std::string ty = choice_of(tn, t.kp("type"), {"torque", "soft", "tako", "space", "torque_switch"});
+            if (ty == "torque") {
+                for (auto &k : t.n->tab)
+                    if (k.key != "type" && k.key != "system")
+                        fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
+                if (Entry *g = t.get("system")) {
+                    std::string gs = str_of(*g->val, t.kp("system"));
+                    if (!find_sys(gs))
+                        fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+                    run.hand = find_sys(gs)->id;
+                }
+                /* type "torque": the joints are driven by their own `actuator` tables */
+            } else {
+                if (Entry *g = t.get("system"))
+                    fail_at(g->kloc, t.kp("system"), "does not apply to a '" + ty + "' gripper (it builds its own hand; name it with 'name')");
+                gripper_hand(t, ty, def);
+                run.hand = sys.back().id;
             }
-            /* type "torque": the joints are driven by their own `actuator` tables */
         }
+
+        /* [capture]: the verdict's object and thresholds (verdict.h) */
+        for (auto &s2 : sys)
+            if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
+        if (Entry *e = top.get("capture")) {
+            Tab t(table_of(*e->val, "capture"), "capture", {"object", "v_max", "w_max", "dwell", "workspace"});
+            if (Entry *o = t.get("object")) {
+                std::string on = str_of(*o->val, t.kp("object"));
+                SysInfo *os = find_sys(on);
+                if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
+                if (m->sys_base_type[os->id] != CD_BASE_FREE)
+                    fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
+                run.object = os->id;
+            }
+            run.v_max = t.num("v_max", run.v_max, Range::Pos);
+            run.w_max = t.num("w_max", run.w_max, Range::Pos);
+            run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
+            run.workspace = t.num("workspace", run.workspace, Range::Pos);
+        }
+        if (run.hand == run.object) run.object = -1;
 
         /* [[pair]] */
         if (Entry *e = top.get("pair")) {
@@ -1628,6 +1869,12 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->output_dt = run.output_dt;
     sc->flush_every = run.flush_every;
     sc->event_capacity = run.event_capacity;
+    sc->capture_hand = run.hand;
+    sc->capture_object = run.object;
+    sc->capture_v_max = run.v_max;
+    sc->capture_w_max = run.w_max;
+    sc->capture_dwell = run.dwell;
+    sc->capture_workspace = run.workspace;
     return sc;
 }
 
