@@ -120,31 +120,32 @@ static inline cd_scenario *lu_load_small_stack(const char *path, const char *con
     return j.sc;
 }
 
-/* Runs capdyn with argv (NULL-terminated, without the program) in dir;
- * returns the exit status (128 + signal if killed); *out / *err receive
- * its stdout / stderr (free them; may be NULL). */
+/* Runs capdyn with args (NULL-terminated, without the program) in the
+ * working directory dir; returns the exit status (128 + signal if killed);
+ * *out / *err receive its stdout / stderr (free them; may be NULL). The
+ * output goes through temporary files in /tmp, never into dir. */
 static inline int lu_capdyn(const char *dir, char **out, char **err, const char *const *args)
 {
-    char o[1024], e[1024];
+    char o[] = "/tmp/capdyn_out_XXXXXX", e[] = "/tmp/capdyn_err_XXXXXX";
     const char *argv[64];
     pid_t pid;
-    int n = 0, st;
+    int n = 0, st, fo = mkstemp(o), fe = mkstemp(e);
+    cr_assert(fo >= 0 && fe >= 0, "mkstemp: %s", strerror(errno));
     argv[n++] = lu_bin();
     while (n < 63 && args[n - 1]) { argv[n] = args[n - 1]; n++; }
     argv[n] = NULL;
-    snprintf(o, sizeof o, "%s/.out.txt", dir);
-    snprintf(e, sizeof e, "%s/.err.txt", dir);
     fflush(NULL);
     pid = fork();
     cr_assert(pid >= 0, "fork: %s", strerror(errno));
     if (pid == 0) {
-        int fo = open(o, O_WRONLY | O_CREAT | O_TRUNC, 0644), fe = open(e, O_WRONLY | O_CREAT | O_TRUNC, 0644);
-        if (fo < 0 || fe < 0 || chdir(dir) != 0) _exit(126);
+        if (chdir(dir) != 0) _exit(126);
         dup2(fo, 1);
         dup2(fe, 2);
         execv(argv[0], (char *const *)argv);
         _exit(127);
     }
+    close(fo);
+    close(fe);
     cr_assert_eq(waitpid(pid, &st, 0), pid);
     if (out) *out = lu_slurp(o);
     if (err) *err = lu_slurp(e);
