@@ -43,6 +43,7 @@ help:
 	@echo "make test     install deps, build, run every test (Criterion)"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@echo "make bench    benchmarks (bench/)"
+	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
 
@@ -76,6 +77,11 @@ $(LIB_IO): $(IO_OBJ)
 $(CLI): $(CLI_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(CLI_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
 
+# the failing-allocator test: its own executable (it interposes malloc)
+FAILALLOC = $(BUILD)/capdyn_failalloc
+$(FAILALLOC): tests/failalloc/failalloc.c $(LIB_IO) $(LIB)
+	$(CC) $(CFLAGS_ALL) -MMD -MP -o $@ $< $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lstdc++
+
 $(TESTBIN): $(TEST_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(TEST_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) $(LIBS_TEST)
 
@@ -85,8 +91,9 @@ cli: $(CLI)
 # The one test command (README, .ci/run): installs what is missing, builds,
 # runs every Criterion test; Criterion prints its synthesis line.
 test: deps
-	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI)
+	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(FAILALLOC)
 	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \
@@ -95,6 +102,7 @@ asan: deps
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 build-asan/capdyn_tests --jobs $(JOBS) $(TEST_ARGS)
 
 -include bench/bench.mk
+-include fuzz/fuzz.mk
 
 demo: deps
 	@$(MAKE) --no-print-directory $(CLI)
@@ -105,6 +113,6 @@ figures: deps
 	@bash plots/figures.sh
 
 clean:
-	rm -rf build build-asan figures
+	rm -rf build build-asan build-fuzz figures
 
 -include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d)

@@ -2,10 +2,15 @@
 # Installs capdyn's build, test and plotting dependencies from Debian packages,
 # only those that are missing. Idempotent; works as root or through sudo.
 # Usage: scripts/install-deps.sh        (CAPDYN_NO_INSTALL=1 to only check)
+#        scripts/install-deps.sh --fuzz adds clang and libFuzzer's runtime,
+#        for `make fuzz` only (scripts/install-fuzz-deps.sh)
 set -euo pipefail
 
 pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
       libtomlplusplus-dev libcriterion-dev gnuplot-nox)
+if [ "${1:-}" = --fuzz ]; then
+  pkgs+=(clang libclang-rt-dev)
+fi
 
 missing=()
 for p in "${pkgs[@]}"; do

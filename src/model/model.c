@@ -357,7 +357,12 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
     m->nsys++;
     cd_m3_identity(R);
     b = new_body(m, s->name, id, -1, CD_JOINT_BASE, z3, R, ax, s->mass, z3, s->inertia, 0.0, 0.0);
-    if (b < 0) { m->nsys--; seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    if (b < 0) { /* undo: the name is not freed by cd_model_free beyond nsys */
+        m->nsys--;
+        free(m->sys_name[id]);
+        seterr(err, CD_ENOMEM, "out of memory");
+        return -1;
+    }
     return id;
 }
 
