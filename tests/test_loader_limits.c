@@ -409,3 +409,60 @@ Test(loader_limits, run_stops_when_its_evaluation_budget_is_spent, .timeout = 60
     }
     lu_rm_rf(dir);
 }
+
+Test(loader_limits, a_file_included_again_and_again_is_bounded)
+{
+    /* b.toml holds 20 000 check points (100 000 values); main includes it
+     * 200 times: 2e7 values to copy, refused at the include that passes 1e7 */
+    char dir[64], path[1024], msg[1024];
+    FILE *f;
+    int i;
+    lu_tmpdir(dir, sizeof dir);
+    snprintf(path, sizeof path, "%s/b.toml", dir);
+    f = fopen(path, "w");
+    cr_assert_not_null(f);
+    fputs("[[system]]\nname = \"ball\"\ncheckpoints = [", f);
+    for (i = 0; i < 20000; i++) fputs("[0, 0, 0, 0],", f);
+    fputs("]\n", f);
+    fclose(f);
+    snprintf(path, sizeof path, "%s/main.toml", dir);
+    f = fopen(path, "w");
+    cr_assert_not_null(f);
+    fputs("include = [", f);
+    for (i = 0; i < 200; i++) fputs("\"b.toml\", ", f);
+    fprintf(f, "]\n%s", BALL);
+    fclose(f);
+    /* the first include is read, the next ones are copies of 100 005 values
+     * each (20 000 rows of 1 + 4, the system table, its entries): the 100th
+     * copy (include[100], column 12 + 10 * 100) passes 1e7 */
+    snprintf(msg, sizeof msg,
+             "main.toml:1:1012: key 'include[100]': expected includes that repeat at most 10^7 values in all, got more "
+             "(file '%s/b.toml' included again and again)",
+             dir);
+    expect_msg(dir, "main.toml", NULL, 0, CD_EINVAL, msg);
+    lu_rm_rf(dir);
+}
+
+Test(loader_limits, convex_vertices_bounded_per_shape_and_in_all)
+{
+    /* 17 convex shapes of 128 vertices: the 17th (its vertices on line
+     * 8 + 3 + 4 * 16 = 75) passes 2048 in all */
+    char dir[64], path[1024];
+    FILE *f;
+    int s, i;
+    lu_tmpdir(dir, sizeof dir);
+    snprintf(path, sizeof path, "%s/h.toml", dir);
+    f = fopen(path, "w");
+    cr_assert_not_null(f);
+    fputs(BALL, f);
+    for (s = 0; s < 17; s++) {
+        fprintf(f, "[[system.shape]]\nname = \"h%d\"\ntype = \"convex\"\nvertices = [", s);
+        for (i = 0; i < 128; i++) fprintf(f, "[%d, %d, %d], ", i % 4, (i / 4) % 4, i / 16);
+        fputs("]\n", f);
+    }
+    fclose(f);
+    expect_msg(dir, "h.toml", NULL, 0, CD_EINVAL,
+               "h.toml:75:12: key 'system[0].shape[16].vertices': expected at most 2048 vertices in all convex shapes "
+               "together, got 2176 with this one");
+    lu_rm_rf(dir);
+}

@@ -279,12 +279,14 @@ const std::string *name_of(Node &t)
 
 /* ---- includes -------------------------------------------------------------------- */
 
-/* A copy of a tree that shares no node with it (merging mutates the base). */
-NodeP deep_copy(const Node &n)
+/* A copy of a tree that shares no node with it (merging mutates the base);
+ * adds the number of nodes copied to *count. */
+NodeP deep_copy(const Node &n, unsigned long long *count)
 {
     auto c = std::make_shared<Node>(n);
-    for (auto &e : c->tab) e.val = deep_copy(*e.val);
-    for (auto &a : c->arr) a = deep_copy(*a);
+    ++*count;
+    for (auto &e : c->tab) e.val = deep_copy(*e.val, count);
+    for (auto &a : c->arr) a = deep_copy(*a, count);
     return c;
 }
 
@@ -346,6 +348,8 @@ const unsigned long long CD_MAX_TOTAL_BYTES = 64ull << 20; /* the main file and 
 const int CD_MAX_KEY_NAMES = 32;                     /* names in one dotted key or table header */
 const int CD_MAX_NESTING = 64;                       /* tables, dotted keys, arrays, inline tables together */
 const size_t CD_MAX_HULL_VERTICES = 128;             /* the hull is built by an O(n^4) search */
+const size_t CD_MAX_TOTAL_HULL_VERTICES = 2048;      /* all convex shapes together */
+const unsigned long long CD_MAX_REUSED_VALUES = 10000000; /* values copied for files included again */
 
 bool is_bare(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '-'; }
 
@@ -509,6 +513,7 @@ struct FileLoader {
      * number of include entries, not exponential in the depth */
     std::unordered_map<std::string, NodeP> done;
     unsigned long long total = 0;    /* bytes read so far, all files */
+    unsigned long long reused = 0;   /* values copied from the cache so far */
 
     static std::string canon(const std::string &p)
     {
@@ -563,7 +568,16 @@ struct FileLoader {
                 fail_at(*from, from_key, "include cycle: " + cyc + path + " (expected a file that does not include itself)");
             }
         auto hit = done.find(cpath);
-        if (hit != done.end()) return deep_copy(*hit->second);
+        if (hit != done.end()) {
+            /* a file included again costs its values, not its bytes: bounded
+             * too (include = ["b.toml", "b.toml", ... 10^6 times]) */
+            NodeP c = deep_copy(*hit->second, &reused);
+            if (reused > CD_MAX_REUSED_VALUES)
+                fail_at(*from, from_key,
+                        "expected includes that repeat at most 10^7 values in all, got more (file '" + path +
+                            "' included again and again)");
+            return c;
+        }
         if (from && stack.size() > (size_t)CD_MAX_INCLUDE_DEPTH)
             fail_at(*from, from_key,
                     "expected includes nested at most " + std::to_string(CD_MAX_INCLUDE_DEPTH) + " levels deep, got " +
@@ -599,7 +613,8 @@ struct FileLoader {
 
         Entry *inc = root->find("include");
         if (!inc) {
-            done.emplace(cpath, deep_copy(*root));
+            unsigned long long n = 0;
+            done.emplace(cpath, deep_copy(*root, &n));
             return root;
         }
         std::vector<std::pair<std::string, Loc>> incs;
@@ -633,7 +648,8 @@ struct FileLoader {
         shown.pop_back();
         root->tab.erase(root->tab.begin() + (inc - root->tab.data()));
         merge_into(*merged, *root);
-        done.emplace(cpath, deep_copy(*merged));
+        unsigned long long n = 0;
+        done.emplace(cpath, deep_copy(*merged, &n));
         return merged;
     }
 };
@@ -1130,6 +1146,7 @@ struct Builder {
     std::unique_ptr<cd_model, ModelDel> m;
     std::vector<SysInfo> sys;
     std::unordered_map<std::string, size_t> sys_at;
+    size_t hull_vertices = 0;  /* all convex shapes so far */
     cd_error err{};
     Loc file_loc;
 
@@ -1221,6 +1238,12 @@ struct Builder {
                 fail_at(vn.loc, t.kp("vertices"),
                         "expected at most " + std::to_string(CD_MAX_HULL_VERTICES) + " [x, y, z] points, got " +
                             std::to_string(vn.arr.size()) + " (the hull is built by brute force)");
+            hull_vertices += vn.arr.size();
+            if (hull_vertices > CD_MAX_TOTAL_HULL_VERTICES)
+                fail_at(vn.loc, t.kp("vertices"),
+                        "expected at most " + std::to_string(CD_MAX_TOTAL_HULL_VERTICES) +
+                            " vertices in all convex shapes together, got " + std::to_string(hull_vertices) +
+                            " with this one");
             for (size_t i = 0; i < vn.arr.size(); i++) {
                 double v[3];
                 vec_of(*vn.arr[i], idx(t.kp("vertices"), i), 3, v);
