@@ -58,6 +58,19 @@ PY
 }
 mkcp 100000 1
 mkcp 10000 1000
+# 1 000 000 check points: two systems of 500 000 in two included files
+# (one file may have 16 MiB)
+python3 - <<'PY'
+for s in ("a", "b"):
+    with open("million_%s.toml" % s, "w") as f:
+        f.write('[[system]]\nname = "%s"\nmass = 1.0\ninertia = [0.1, 0.1, 0.1]\n' % s)
+        f.write("checkpoints = [" + ", ".join("[%d, 0, 0, 0]" % i for i in range(500000)) + "]\n")
+with open("million.toml", "w") as f:
+    f.write('include = ["million_a.toml", "million_b.toml"]\n[simulation]\nduration = 0.01\n')
+    f.write('[[target]]\nname = "t"\nmass = 1.0\ninertia = [0.1, 0.1, 0.1]\nposition = [0, 0, -5]\n')
+    f.write('shape = { type = "sphere", radius = 0.5 }\n')
+    f.write('[[pair]]\ncheckpoints = "a"\nshape = "t"\n[[pair]]\ncheckpoints = "b"\nshape = "t"\n')
+PY
 
 # 5. duration = 1e300
 printf '%s\n' "$body" | sed 's/duration = 0.01/duration = 1e300/' > long.toml
@@ -81,4 +94,5 @@ run "table header (20000)" header.toml
 run "nested arrays (20000)" nested.toml
 run "100000 check points" cp_100000_1.toml
 run "10000 cp x 1000 pairs" cp_10000_1000.toml
+run "1000000 check points" million.toml
 run "duration = 1e300" long.toml

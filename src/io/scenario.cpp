@@ -614,7 +614,7 @@ struct FileLoader {
         Entry *inc = root->find("include");
         if (!inc) {
             unsigned long long n = 0;
-            done.emplace(cpath, deep_copy(*root, &n));
+            if (from) done.emplace(cpath, deep_copy(*root, &n)); /* the main file is never included again */
             return root;
         }
         std::vector<std::pair<std::string, Loc>> incs;
@@ -649,7 +649,7 @@ struct FileLoader {
         root->tab.erase(root->tab.begin() + (inc - root->tab.data()));
         merge_into(*merged, *root);
         unsigned long long n = 0;
-        done.emplace(cpath, deep_copy(*merged, &n));
+        if (from) done.emplace(cpath, deep_copy(*merged, &n));
         return merged;
     }
 };
