@@ -168,13 +168,13 @@ Test(loader_limits, dotted_key_of_20000_names_is_refused_before_the_parser)
     lu_tmpdir(dir, sizeof dir);
     long_line(dir, "key.toml", "a", ".a", 19999, " = 1");
     expect_msg(dir, "key.toml", NULL, 0, CD_EINVAL,
-               "key.toml:8:1: expected a key or table header of at most 32 dotted names, got 20000");
+               "key.toml:8:1: key 'a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a...': expected a key or table header of at most 32 dotted names, got 20000");
     long_line(dir, "header.toml", "[a", ".a", 19999, "]");
     expect_msg(dir, "header.toml", NULL, 0, CD_EINVAL,
-               "header.toml:8:2: expected a key or table header of at most 32 dotted names, got 20000");
+               "header.toml:8:2: key 'a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a.a...': expected a key or table header of at most 32 dotted names, got 20000");
     long_line(dir, "aot.toml", "[[\"a\"", ".'a'", 19999, "]]");
     expect_msg(dir, "aot.toml", NULL, 0, CD_EINVAL,
-               "aot.toml:8:3: expected a key or table header of at most 32 dotted names, got 20000");
+               "aot.toml:8:3: key '\"a\".'a'.'a'.'a'.'a'.'a'.'a'.'a'.'a'.'a'...': expected a key or table header of at most 32 dotted names, got 20000");
     /* 32 names pass the bound: the schema names the unknown key (in the
      * [[system]] table the file ends with) */
     long_line(dir, "ok.toml", "system.a", ".a", 30, " = 1");

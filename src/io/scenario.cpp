@@ -412,9 +412,13 @@ template <class LocOf> void prescan(const std::string &s, LocOf loc_of)
             if (j < n && s[j] == '.') { j++; continue; }
             break;
         }
-        if (names > CD_MAX_KEY_NAMES)
-            fail_at(loc_of(start), "", "expected a key or table header of at most " + std::to_string(CD_MAX_KEY_NAMES) +
-                                           " dotted names, got " + std::to_string(names));
+        if (names > CD_MAX_KEY_NAMES) {
+            std::string shown = s.substr(start, std::min<size_t>(j - start, 40));
+            while (j - start > 40 && !shown.empty() && (shown.back() == '.' || shown.back() == ' ')) shown.pop_back();
+            fail_at(loc_of(start), shown + (j - start > 40 ? "..." : ""),
+                    "expected a key or table header of at most " + std::to_string(CD_MAX_KEY_NAMES) +
+                        " dotted names, got " + std::to_string(names));
+        }
         return names;
     };
     while (i < n) {
