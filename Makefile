@@ -46,6 +46,7 @@ help:
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@echo "make bench    benchmarks (bench/)"
+	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
 	@echo "make install PREFIX=/usr/local   static libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
@@ -81,6 +82,11 @@ $(LIB_IO): $(IO_OBJ)
 $(CLI): $(CLI_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(CLI_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
 
+# the failing-allocator test: its own executable (it interposes malloc)
+FAILALLOC = $(BUILD)/capdyn_failalloc
+$(FAILALLOC): tests/failalloc/failalloc.c $(LIB_IO) $(LIB)
+	$(CC) $(CFLAGS_ALL) -MMD -MP -o $@ $< $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lstdc++
+
 $(TESTBIN): $(TEST_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(TEST_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) $(LIBS_TEST)
 
@@ -103,8 +109,9 @@ examples: check-deps $(EXAMPLES)
 # runs every Criterion test (Criterion prints its synthesis line), then runs
 # every example (a failing example fails the target).
 test: deps
-	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES)
+	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)
 	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
 	@$(MAKE) --no-print-directory install-check
 
@@ -117,6 +124,7 @@ asan: deps
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1; $(call run_examples,$(EXAMPLES:$(BUILD)/%=build-asan/%))
 
 -include bench/bench.mk
+-include fuzz/fuzz.mk
 
 # ---- install (docs/performance.md "Installing"; tests/install_check.sh) ----
 # Static libraries, public headers, pkg-config files and the CLI under
@@ -162,6 +170,6 @@ figures: deps
 	@bash plots/figures.sh
 
 clean:
-	rm -rf build build-asan figures
+	rm -rf build build-asan build-fuzz figures
 
 -include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)
