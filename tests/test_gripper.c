@@ -189,3 +189,111 @@ Test(gripper, open_command_re_engages_without_chatter)
     cd_data_free(d);
     cd_model_free(m);
 }
+
+/* ---- grippers built from scenarios, and capture verdicts ------------------------ */
+#include <capdyn/io.h>
+#include <capdyn/verdict.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static cd_scenario *load_gripper(const char *const *sets, int nsets)
+{
+    char p[1024];
+    cd_error e;
+    cd_scenario *sc;
+    const char *r = getenv("CAPDYN_ROOT");
+    snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_space.toml", r ? r : ".");
+    sc = cd_scenario_load(p, sets, nsets, &e);
+    cr_assert(sc, "%s", e.msg);
+    return sc;
+}
+
+Test(gripper, soft_and_tako_split_the_motor_torque_quadratically)
+{
+    /* soft: one motor per finger; tako: one motor for every joint of every
+     * finger; both with the quadratic split (n - j)^2 from the tip: 4 : 1 for
+     * two links. Joint torque = ratio x motor torque, exactly (1e-12). */
+    const char *types[2] = {"gripper.type=\"soft\"", "gripper.type=\"tako\""};
+    int k;
+    for (k = 0; k < 2; k++) {
+        const char *sets[1] = {types[k]};
+        cd_scenario *sc;
+        cd_error e;
+        cd_data *d;
+        const cd_model *m;
+        int f, j;
+        char p[1024];
+        const char *r = getenv("CAPDYN_ROOT");
+        snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_tako.toml", r ? r : ".");
+        sc = cd_scenario_load(p, sets, 1, &e);
+        cr_assert(sc, "%s", e.msg);
+        m = sc->model;
+        cr_expect_eq(m->nu, k == 0 ? 2 : 1, "%s: motors %d", types[k], m->nu);
+        cr_expect_eq(m->nfinger, 0);
+        d = cd_data_create(m, 0, &e);
+        cr_assert(d, "%s", e.msg);
+        for (f = 0; f < 2; f++)
+            for (j = 0; j < 2; j++) {
+                char nm[64];
+                int b;
+                snprintf(nm, sizeof nm, "hand/f%d_l%d", f, j);
+                b = cd_model_body_id(m, nm);
+                cr_assert(b > 0, "%s", nm);
+                cr_expect_lt(fabs(d->qfrc_actuator[m->body_dof[b]] - (j == 0 ? 4.0 : 1.0) * 0.05), 1e-12,
+                             "%s %s: %.17g", types[k], nm, d->qfrc_actuator[m->body_dof[b]]);
+            }
+        cd_data_free(d);
+        cd_scenario_free(sc);
+    }
+}
+
+/* runs the scenario sampling every output_dt, as capdyn run does */
+static cd_monitor run_verdict(cd_scenario *sc, double t_end)
+{
+    cd_monitor mo;
+    cd_monitor_opts op = cd_monitor_opts_default();
+    cd_error e;
+    cd_data *d = cd_data_create(sc->model, 0, &e);
+    double t;
+    int i, n;
+    cr_assert(d, "%s", e.msg);
+    cr_assert(sc->capture_hand >= 0 && sc->capture_object >= 0, "hand %d object %d", sc->capture_hand, sc->capture_object);
+    op.hand = sc->capture_hand;
+    op.object = sc->capture_object;
+    op.v_max = sc->capture_v_max; op.w_max = sc->capture_w_max; op.dwell = sc->capture_dwell; op.workspace = sc->capture_workspace;
+    cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
+    n = (int)ceil(t_end / sc->output_dt - 1e-9);
+    for (i = 1; i <= n; i++) {
+        t = i == n ? t_end : i * sc->output_dt;
+        cr_assert_eq(cd_sim_advance(sc->model, d, t, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cd_monitor_update(&mo, sc->model, d);
+    }
+    cd_data_free(d);
+    return mo;
+}
+
+Test(gripper, verdicts_captured_escaped_unresolved)
+{
+    /* centred cylinder: captured (enclosed, at rest relative to the palm,
+     * fingers stopped, contacts unchanged for 0.2 s); the same cylinder
+     * thrown out of the hand at 2 m/s: escaped; the centred one stopped at
+     * 50 ms, before the fingers reach it: unresolved. */
+    const char *thrown[1] = {"target[0].velocity=[0.0, 2.0, 0.0]"};
+    cd_scenario *sc = load_gripper(NULL, 0);
+    cd_monitor mo = run_verdict(sc, 1.0);
+    cr_log_info("captured at %.4g s: peak fn %.4g N, peak tau %.4g N m, %d stick %d slip, offset %.4g m", mo.t_capture,
+                mo.peak_fn, mo.peak_tau, mo.n_stick, mo.n_slip, mo.offset_norm);
+    cr_expect_eq(mo.verdict, CD_VERDICT_CAPTURED, "verdict %s", cd_verdict_name(mo.verdict));
+    cr_expect(mo.enclosed && mo.n_stick + mo.n_slip >= 2, "enclosed, held by >= 2 contacts (%d)", mo.n_stick + mo.n_slip);
+    cr_expect_lt(mo.v_rel, 1e-3);
+    cd_scenario_free(sc);
+    sc = load_gripper(thrown, 1);
+    mo = run_verdict(sc, 0.5);
+    cr_expect_eq(mo.verdict, CD_VERDICT_ESCAPED, "verdict %s", cd_verdict_name(mo.verdict));
+    cr_expect_gt(mo.offset_norm, mo.opt.workspace);
+    cd_scenario_free(sc);
+    sc = load_gripper(NULL, 0);
+    mo = run_verdict(sc, 0.05);
+    cr_expect_eq(mo.verdict, CD_VERDICT_UNRESOLVED, "verdict %s", cd_verdict_name(mo.verdict));
+    cd_scenario_free(sc);
+}
