@@ -21,6 +21,7 @@ IO_SRC_CXX = $(wildcard src/io/*.cpp)
 CLI_SRC  = $(wildcard src/cli/*.c)
 TEST_SRC = $(wildcard tests/*.c)
 BENCH_SRC = $(wildcard bench/*.c)
+EXAMPLE_SRC = $(wildcard examples/*.c)
 
 CORE_OBJ = $(CORE_SRC:%.c=$(BUILD)/%.o)
 IO_OBJ   = $(IO_SRC_C:%.c=$(BUILD)/%.o) $(IO_SRC_CXX:%.cpp=$(BUILD)/%.o)
@@ -31,18 +32,21 @@ LIB      = $(BUILD)/libcapdyn.a
 LIB_IO   = $(BUILD)/libcapdyn_io.a
 CLI      = $(BUILD)/capdyn
 TESTBIN  = $(BUILD)/capdyn_tests
+EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps lib cli test asan bench demo figures clean help check-deps install uninstall install-check
+.PHONY: all deps lib cli examples test asan bench demo figures clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI)
 
 help:
 	@echo "make deps     install Debian packages (scripts/install-deps.sh)"
 	@echo "make          build $(LIB) and $(CLI)"
-	@echo "make test     install deps, build, run every test (Criterion)"
+	@echo "make test     install deps, build, run every test (Criterion), then every example"
+	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@echo "make bench    benchmarks (bench/)"
+	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
 	@echo "make install PREFIX=/usr/local   static libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
@@ -78,26 +82,49 @@ $(LIB_IO): $(IO_OBJ)
 $(CLI): $(CLI_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(CLI_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
 
+# the failing-allocator test: its own executable (it interposes malloc)
+FAILALLOC = $(BUILD)/capdyn_failalloc
+$(FAILALLOC): tests/failalloc/failalloc.c $(LIB_IO) $(LIB)
+	$(CC) $(CFLAGS_ALL) -MMD -MP -o $@ $< $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lstdc++
+
 $(TESTBIN): $(TEST_OBJ) $(LIB_IO) $(LIB)
 	$(CXX) $(OPT) $(EXTRA_LDFLAGS) -o $@ $(TEST_OBJ) $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) $(LIBS_TEST)
 
+# Examples: each examples/NAME.c is one self-contained program on the core
+# library alone (<capdyn/capdyn.h>, libcapdyn.a, GSL, libccd), as an embedder
+# builds it. Each is also a test: it exits non-zero when what it demonstrates
+# does not hold.
+$(BUILD)/examples/%: examples/%.c $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(EXTRA_CFLAGS) -MMD -MP $(EXTRA_LDFLAGS) -o $@ $< $(LIB) $(LIBS_CORE)
+
+# runs every example binary given; the first failure fails the target
+run_examples = for e in $(1); do echo "$$e"; ./$$e || { echo "example $$e failed" >&2; exit 1; }; done
+
 lib: $(LIB)
 cli: $(CLI)
+examples: check-deps $(EXAMPLES)
 
 # The one test command (README, .ci/run): installs what is missing, builds,
-# runs every Criterion test; Criterion prints its synthesis line.
+# runs every Criterion test (Criterion prints its synthesis line), then runs
+# every example (a failing example fails the target).
 test: deps
-	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI)
+	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)
 	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
+	@$(call run_examples,$(EXAMPLES))
 	@$(MAKE) --no-print-directory install-check
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \
-	  EXTRA_LDFLAGS="-fsanitize=address,undefined" build-asan/capdyn_tests build-asan/capdyn
+	  EXTRA_LDFLAGS="-fsanitize=address,undefined" build-asan/capdyn_tests build-asan/capdyn $(EXAMPLES:$(BUILD)/%=build-asan/%)
 	CAPDYN_BIN=$(abspath build-asan/capdyn) CAPDYN_ROOT=$(CURDIR) ASAN_OPTIONS=detect_leaks=1 \
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 build-asan/capdyn_tests --jobs $(JOBS) $(TEST_ARGS)
+	@export ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
+	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1; $(call run_examples,$(EXAMPLES:$(BUILD)/%=build-asan/%))
 
 -include bench/bench.mk
+-include fuzz/fuzz.mk
 
 # ---- install (docs/performance.md "Installing"; tests/install_check.sh) ----
 # Static libraries, public headers, pkg-config files and the CLI under
@@ -113,7 +140,7 @@ PUB_HEADERS = $(wildcard include/capdyn/*.h)
 PC_FILES = capdyn.pc capdyn-io.pc
 # installs into a temporary prefix, builds and runs the embedding programs
 # against the installed copy only (add examples here as they come)
-INSTALL_CHECK_SRC ?= tests/embed/embed_core.c tests/embed/embed_io.c
+INSTALL_CHECK_SRC ?= tests/embed/embed_core.c tests/embed/embed_io.c $(EXAMPLE_SRC)
 
 install: check-deps $(LIB) $(LIB_IO) $(CLI)
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/capdyn $(DESTDIR)$(PCDIR) $(DESTDIR)$(BINDIR)
@@ -143,6 +170,6 @@ figures: deps
 	@bash plots/figures.sh
 
 clean:
-	rm -rf build build-asan figures
+	rm -rf build build-asan build-fuzz figures
 
--include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d)
+-include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)

@@ -4,6 +4,7 @@
 BENCH_BIN = $(BUILD)/bench_core
 BENCH_SPEED = $(BUILD)/bench_speed
 BENCH_REPS ?= 5
+BENCH_HOLD ?= 10
 BENCH_RESULT = bench/results/$(shell date -u +%Y-%m-%d).txt
 
 $(BENCH_BIN): bench/bench_core.c bench/bench_chain.h $(LIB)
@@ -24,7 +25,7 @@ bench: bench-deps
 	$(BENCH_BIN)
 	@bash bench/bench_scenarios.sh
 	@mkdir -p bench/results
-	$(BENCH_SPEED) -r $(BENCH_REPS) -o $(BENCH_RESULT)
+	$(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) -o $(BENCH_RESULT)
 	@echo "results: $(BENCH_RESULT)"
 
 .PHONY: bench-deps

@@ -3,7 +3,8 @@
  *  1. Scenes, interleaved, R repetitions (default 5), each run in a fresh
  *     process (fork + exec) so that its peak resident memory is its own:
  *       grasp   scenarios/paper_fig5_envelope_grasp.toml (rtol 1e-6) and its
- *               twin bench/mjcf/fig5_grasp.xml: 2 s closing + 10 s hold;
+ *               twin bench/mjcf/fig5_grasp.xml: 2 s closing + 10 s hold
+ *               (--hold S);
  *               accuracy: object offset over the hold and creep rate
  *       incline bench/incline.toml and bench/mjcf/incline.xml, 10 s;
  *               accuracy: drift along the slope between t = 1 s and 10 s
@@ -12,11 +13,12 @@
  *     evaluations (MuJoCo: one mj_forward per mj_step), peak RSS and heap.
  *  2. Forward dynamics of free-floating chains, 1 to 64 joints: capdyn
  *     cd_kinematics + cd_forward_dynamics_method (CRBA, ABA) vs MuJoCo
- *     mj_forward (no contacts), ns per call, min and median over interleaved
- *     repetitions; the crossover CRBA -> ABA is read from this table.
+ *     mj_forward (no contacts), ns per call, min and median over 3 x R
+ *     interleaved repetitions; the crossover CRBA -> ABA is read from the
+ *     minima of this table.
  *
  * capdyn is driven only through its public headers (include/capdyn/ headers).
- * Usage: bench_speed [-r reps] [-o results.txt] [--fd-only] [--scenes-only]
+ * Usage: bench_speed [-r reps] [-o results.txt] [--hold S] [--fd-only] [--scenes-only]
  * (run from the repository root). */
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
@@ -41,6 +43,11 @@
 static FILE *out_file;
 
 /* print to stdout and to the results file */
+static void say(const char *fmt, ...)
+#if defined(__GNUC__)
+    __attribute__((format(printf, 1, 2)))
+#endif
+    ;
 static void say(const char *fmt, ...)
 {
     va_list ap;
@@ -93,7 +100,8 @@ static long heap_bytes(void)
 enum { ENG_CAPDYN = 0, ENG_MUJOCO = 1 };
 enum { SC_GRASP = 0, SC_INCLINE = 1, NSCENE = 2 };
 static const char *scene_name[NSCENE] = {"grasp", "incline"};
-static const double T_CLOSE = 2.0, T_HOLD = 10.0, T_INCLINE = 10.0, T_SETTLE = 1.0;
+static const double T_CLOSE = 2.0, T_INCLINE = 10.0, T_SETTLE = 1.0;
+static double T_HOLD = 10.0; /* --hold S */
 
 /* what a child reports back through its pipe */
 typedef struct {
@@ -252,13 +260,14 @@ static run_result run_child(int engine, int scene)
     fflush(NULL);
     pid = fork();
     if (pid == 0) {
-        char e[8], sc[8];
+        char e[8], sc[8], hold[32];
         snprintf(e, sizeof e, "%d", engine);
         snprintf(sc, sizeof sc, "%d", scene);
+        snprintf(hold, sizeof hold, "%.17g", T_HOLD);
         close(fd[0]);
         dup2(fd[1], STDOUT_FILENO);
         close(fd[1]);
-        execl("/proc/self/exe", self_path, "--child", e, sc, (char *)NULL);
+        execl("/proc/self/exe", self_path, "--child", e, sc, hold, (char *)NULL);
         _exit(127);
     }
     close(fd[1]);
@@ -275,6 +284,50 @@ static run_result run_child(int engine, int scene)
     return r;
 }
 
+/* The twins must describe the same bodies: masses, principal inertias and
+ * gravity compared before any timing (a twin edited on one side only fails
+ * the bench instead of comparing different scenes). */
+static int sort3_cmp(const void *a, const void *b) { return cmp_double(a, b); }
+
+static int twin_check(int scene)
+{
+    static const char *grasp_cd[] = {"hand/left1", "hand/left2", "hand/right1", "hand/right2", "object"};
+    static const char *grasp_mj[] = {"left1", "left2", "right1", "right2", "object"};
+    static const char *inc_cd[] = {"block"}, *inc_mj[] = {"block"};
+    const char *path = scene == SC_GRASP ? "scenarios/paper_fig5_envelope_grasp.toml" : "bench/incline.toml";
+    const char *xml = scene == SC_GRASP ? "bench/mjcf/fig5_grasp.xml" : "bench/mjcf/incline.xml";
+    const char **ncd = scene == SC_GRASP ? grasp_cd : inc_cd, **nmj = scene == SC_GRASP ? grasp_mj : inc_mj;
+    int n = scene == SC_GRASP ? 5 : 1, i, k, bad = 0;
+    char err[1000] = "";
+    cd_error e;
+    cd_scenario *sc = cd_scenario_load(path, NULL, 0, &e);
+    mjModel *mm = mj_loadXML(xml, NULL, err, (int)sizeof err);
+    double worst = 0;
+    if (!sc || !mm) {
+        fprintf(stderr, "bench_speed: twin check: %s\n", sc ? err : e.msg);
+        cd_scenario_free(sc);
+        if (mm) mj_deleteModel(mm);
+        return 1;
+    }
+    for (i = 0; i < n; i++) {
+        int bc = cd_model_body_id(sc->model, ncd[i]), bm = mj_name2id(mm, mjOBJ_BODY, nmj[i]);
+        double ic[3], im[3];
+        if (bc < 0 || bm < 0) { fprintf(stderr, "bench_speed: twin check: no body %s / %s\n", ncd[i], nmj[i]); bad = 1; continue; }
+        for (k = 0; k < 3; k++) { ic[k] = sc->model->body_inertia[9 * bc + 4 * k]; im[k] = mm->body_inertia[3 * bm + k]; }
+        qsort(ic, 3, sizeof(double), sort3_cmp);
+        qsort(im, 3, sizeof(double), sort3_cmp);
+        worst = fmax(worst, fabs(sc->model->body_mass[bc] - mm->body_mass[bm]) / sc->model->body_mass[bc]);
+        for (k = 0; k < 3; k++) worst = fmax(worst, fabs(ic[k] - im[k]) / ic[k]);
+    }
+    for (k = 0; k < 3; k++) worst = fmax(worst, fabs(sc->model->gravity[k] - mm->opt.gravity[k]) / 9.81);
+    if (worst > 1e-6) bad = 1;
+    say("twin check %-8s masses, principal inertias, gravity: largest relative difference %.1e%s\n", scene_name[scene],
+        worst, bad ? "  MISMATCH" : "");
+    cd_scenario_free(sc);
+    mj_deleteModel(mm);
+    return bad;
+}
+
 static int bench_scenes(int reps)
 {
     static double rtf[NSCENE][2][MAXREP], wps[NSCENE][2][MAXREP], ratio[NSCENE][MAXREP];
@@ -284,6 +337,8 @@ static int bench_scenes(int reps)
     int rep, sc, eng, failed = 0;
     say("\n== scenes: capdyn (GSL, event-located stick-slip) vs MuJoCo %s (dt 2 ms), %d interleaved repetitions ==\n",
         mj_versionString(), reps);
+    for (sc = 0; sc < NSCENE; sc++)
+        if (twin_check(sc)) return 1;
     for (rep = 0; rep < reps; rep++)
         for (sc = 0; sc < NSCENE; sc++) {
             int k;
@@ -332,10 +387,11 @@ static int bench_scenes(int reps)
     say("final object position [mm]: grasp capdyn (%.4f, %.4f, %.4f), MuJoCo (%.4f, %.4f, %.4f)\n",
         1e3 * last[SC_GRASP][0].pos[0], 1e3 * last[SC_GRASP][0].pos[1], 1e3 * last[SC_GRASP][0].pos[2],
         1e3 * last[SC_GRASP][1].pos[0], 1e3 * last[SC_GRASP][1].pos[1], 1e3 * last[SC_GRASP][1].pos[2]);
-    say("offset: grasp = |object(12 s) - object(2 s)| over the 10 s hold; incline = |block(10 s) - block(1 s)|;\n"
-        "rate: creep rate over the second half of that span (grasp 7-12 s, incline 5.5-10 s).\n"
+    say("offset: grasp = |object(end) - object(2 s)| over the %g s hold; incline = |block(10 s) - block(1 s)|;\n"
+        "rate: creep rate over the second half of that span (grasp %g-%g s, incline 5.5-10 s).\n"
         "ratio = capdyn RTF / MuJoCo RTF of the same repetition. RSS: peak resident memory of the process\n"
-        "running one engine (both libraries mapped); heap: model + data allocated by the engine.\n");
+        "running one engine (both libraries mapped); heap: model + data allocated by the engine.\n",
+        T_HOLD, T_CLOSE + 0.5 * T_HOLD, T_CLOSE + T_HOLD);
     return 0;
 }
 
@@ -371,13 +427,16 @@ static int bench_fd(int reps)
     const int nsize = (int)(sizeof sizes / sizeof sizes[0]);
     static double ns[32][NFD][MAXREP];
     int k, rep, meth, cross_free = -1, cross_fixed = -1;
+    /* short timing blocks, many repetitions: on a shared machine the minima
+     * then catch quiet moments (the crossover is judged on them) */
+    reps = 3 * reps < MAXREP ? 3 * reps : MAXREP;
     say("\n== forward dynamics per call, free-floating chain (fixed-base columns: the same chain on a fixed base) ==\n");
     say("capdyn: cd_kinematics + cd_forward_dynamics_method; MuJoCo: mj_forward (no geoms, no contacts)\n");
-    say("ns per call, median [min] of %d interleaved repetitions\n", reps);
+    say("ns per call, median [min] of %d interleaved repetitions (3 x -r)\n", reps);
     say("%6s %5s %18s %18s %18s %9s | %18s %18s\n", "joints", "DoF", "capdyn CRBA", "capdyn ABA", "MuJoCo mj_forward",
         "best/MJ", "fixed CRBA", "fixed ABA");
     for (k = 0; k < nsize; k++) {
-        int n = sizes[k], calls = 40000 / (n + 4) + 50, i;
+        int n = sizes[k], calls = 15000 / (n + 4) + 20, i;
         cd_error e;
         /* a fixed base without joints has nothing to solve: the same free
          * body stands in (its fixed-base columns are not printed) */
@@ -443,25 +502,37 @@ int main(int argc, char **argv)
     time_t t = time(NULL);
     char date[64];
     self_path = argv[0];
-    if (argc == 4 && !strcmp(argv[1], "--child")) return child_main(atoi(argv[2]), atoi(argv[3]));
+    if (argc == 5 && !strcmp(argv[1], "--child")) {
+        T_HOLD = atof(argv[4]);
+        return child_main(atoi(argv[2]), atoi(argv[3]));
+    }
     for (i = 1; i < argc; i++) {
         if (!strcmp(argv[i], "-r") && i + 1 < argc) reps = atoi(argv[++i]);
         else if (!strcmp(argv[i], "-o") && i + 1 < argc) out = argv[++i];
+        else if (!strcmp(argv[i], "--hold") && i + 1 < argc) T_HOLD = atof(argv[++i]);
         else if (!strcmp(argv[i], "--fd-only")) do_scenes = 0;
         else if (!strcmp(argv[i], "--scenes-only")) do_fd = 0;
         else {
-            fprintf(stderr, "usage: %s [-r reps (5..%d)] [-o results.txt] [--fd-only | --scenes-only]\n", argv[0], MAXREP);
+            fprintf(stderr, "usage: %s [-r reps (1..%d, default 5)] [-o results.txt] [--hold seconds (grasp hold, default 10)]\n"
+                            "       [--fd-only | --scenes-only]\n", argv[0], MAXREP);
             return 2;
         }
     }
     if (reps < 1 || reps > MAXREP) { fprintf(stderr, "bench_speed: -r: expected 1..%d, got %d\n", MAXREP, reps); return 2; }
+    if (!(T_HOLD >= 1.0 && T_HOLD <= 1000.0)) { fprintf(stderr, "bench_speed: --hold: expected 1..1000 s\n"); return 2; }
     gsl_set_error_handler_off();
     if (out && !(out_file = fopen(out, "w"))) { perror(out); return 1; }
     gethostname(host, sizeof host - 1);
     strftime(date, sizeof date, "%Y-%m-%d %H:%M UTC", gmtime(&t));
     say("capdyn %s vs MuJoCo %s -- %s, host %s, %ld online CPUs\n", cd_version(), mj_versionString(), date, host,
         sysconf(_SC_NPROCESSORS_ONLN));
-    say("command: make bench (bench/bench_speed.c, -r %d)\n", reps);
+    {
+        double la[3] = {0, 0, 0};
+        if (getloadavg(la, 3) == 3) say("load average at start %.2f %.2f %.2f (other jobs on the machine skew medians; see the minima)\n", la[0], la[1], la[2]);
+    }
+    say("command:");
+    for (i = 0; i < argc; i++) say(" %s", argv[i]);
+    say("   (make bench runs it; %d repetitions, grasp hold %g s)\n", reps, T_HOLD);
     if (do_fd) rc |= bench_fd(reps);
     if (do_scenes) rc |= bench_scenes(reps);
     if (out_file) fclose(out_file);

@@ -3,12 +3,17 @@
 # only those that are missing. Idempotent; works as root or through sudo.
 # Usage: scripts/install-deps.sh        (CAPDYN_NO_INSTALL=1 to only check;
 #        CAPDYN_EXTRA_PKGS="a b" adds packages, e.g. scripts/install-bench-deps.sh)
+#        scripts/install-deps.sh --fuzz adds clang and libFuzzer's runtime,
+#        for `make fuzz` only (scripts/install-fuzz-deps.sh)
 set -euo pipefail
 
 pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
       libtomlplusplus-dev libqhull-dev libcriterion-dev gnuplot-nox)
 # shellcheck disable=SC2206
 pkgs+=(${CAPDYN_EXTRA_PKGS:-})
+if [ "${1:-}" = --fuzz ]; then
+  pkgs+=(clang libclang-rt-dev)
+fi
 
 missing=()
 for p in "${pkgs[@]}"; do

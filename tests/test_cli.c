@@ -1055,7 +1055,7 @@ Test(cli, bad_arguments_exit_2_runtime_errors_exit_1)
 
 Test(cli, check_prints_the_model_summary)
 {
-    /* capdyn check: exit 0 and one OK line whose counts are the model's
+    /* capdyn check: exit 0 and an OK line whose counts are the model's
      * (cd_scenario_load of the same file); --set applies. */
     char dir[64], sc[512], want[128], *out = NULL;
     cd_error e;
@@ -1070,7 +1070,14 @@ Test(cli, check_prints_the_model_summary)
     cr_expect(out && strstr(out, ": OK: ") != NULL, "%s", out);
     snprintf(want, sizeof want, "%d contact slots, state size %d; 0.5 s", s->model->nslot, s->model->ny);
     cr_expect(out && strstr(out, want) != NULL, "'%s' in '%s'", want, out);
-    cr_expect(out && strchr(out, '\n') == out + strlen(out) - 1, "one line");
+    /* second and last line: the least work, 0.5 s / h_max 1e-3 s = 500 steps
+     * of rk8pd (12 new evaluations each), and the default budget */
+    {
+        const char *nl = out ? strchr(out, '\n') : NULL;
+        cr_expect(nl && strcmp(nl + 1, "work: at least 500 steps and 6000 right-hand-side evaluations; budget: "
+                                       "max_rhs_evals 1e+09, max_wall_time 3600 s\n") == 0,
+                  "%s", out);
+    }
     free(out);
     cd_scenario_free(s);
     rm_rf(dir);

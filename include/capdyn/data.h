@@ -7,7 +7,10 @@
  * finalized model and keeps no pointer to it: pass the model to every call.
  * All of its memory is one block taken at cd_data_create (from the caller's
  * allocator if one is given), except GSL's own stepper objects, which GSL
- * allocates itself. This header sits below dynamics, contact and the
+ * allocates itself. After creation nothing allocates except: the implicit
+ * steppers rk4imp and msbdf (inside GSL), cd_state_copy (one temporary
+ * buffer) and cd_data_reset with opt.equilibrium_start (the settle's work
+ * space), both through the data's allocator. This header sits below dynamics, contact and the
  * integrator: it knows the layout, not the physics. */
 #ifndef CAPDYN_DATA_H
 #define CAPDYN_DATA_H
@@ -19,8 +22,9 @@ extern "C" {
 #endif
 
 typedef enum { CD_MODE_OPEN = 0, CD_MODE_STICK = 1, CD_MODE_SLIP = 2 } cd_slot_mode;
-/* Modes of a joint stop unit and of a joint-friction unit. */
+/* Modes of a joint stop unit and of a clutched finger. */
 typedef enum { CD_LIM_FREE = 0, CD_LIM_LOWER = 1, CD_LIM_UPPER = 2 } cd_limit_mode;
+typedef enum { CD_CLUTCH_ENGAGED = 0, CD_CLUTCH_RELEASED = 1 } cd_clutch_mode;
 
 typedef enum {
     CD_EV_ONSET = 0,       /* open -> stick: penetration (or normal force) crosses 0 upward */
@@ -32,7 +36,9 @@ typedef enum {
     CD_EV_LIMIT_ENGAGE,    /* a joint reaches its lower or upper stop */
     CD_EV_LIMIT_RELEASE,   /* the stop's force returns to zero */
     CD_EV_USER,            /* a user switch fired (cd_data_set_user_switches) */
-    CD_EV_SCHEDULE,        /* a schedule breakpoint (STEPS/TABLE row, waypoint) was reached */
+    CD_EV_SCHEDULE,        /* an actuator's STEPS/TABLE row changed (owner: the actuator); waypoints
+                              and clutch schedules end steps and restart the stepper, unlogged */
+    CD_EV_CLUTCH,          /* a finger's clutch disengaged (load reached its threshold) or re-engaged (open) */
     CD_EV_NKINDS
 } cd_event_kind;
 
@@ -42,6 +48,7 @@ typedef enum {
     CD_OWNER_JOINT,        /* owner = joint body (stop, friction, prescribed waypoint) */
     CD_OWNER_ACTUATOR,     /* owner = actuator (schedule step) */
     CD_OWNER_USER,         /* owner = user switch index */
+    CD_OWNER_FINGER,       /* owner = clutched finger */
     CD_OWNER_NKINDS
 } cd_owner_kind;
 
@@ -111,9 +118,12 @@ typedef struct {
  * all the work space.
  * What the caller may write between calls: t, y (then the integrator
  * re-checks every mode and restarts its stepper), the inputs (ctrl,
- * qfrc_applied, xfrc_applied, xfrc_body: a change takes effect exactly at the
- * call boundary, where the stepper restarts), opt (runtime options, see
- * model.h) and user_mode. Everything else is output or private. */
+ * qfrc_applied, xfrc_applied, xfrc_body, user_mode, and the callbacks
+ * through their setters: a change takes effect exactly at the call
+ * boundary, where the stepper restarts), opt (runtime options, see model.h).
+ * Everything else is output or private. A call rejected for its arguments
+ * (CD_EINVAL before any step) leaves no trace: the next call still sees the
+ * changes. */
 typedef struct cd_data {
     double t;             /* [s] */
     double *y;            /* (ny) continuous state, layout in docs/dynamics.md */
@@ -148,7 +158,7 @@ typedef struct cd_data {
     double *qfrc_actuator;/* from the actuators through their transmissions */
     double *qfrc_passive; /* joint springs, dampers, Coulomb friction and stops */
     double *qfrc_constraint; /* what the prescribed joints/bases take to follow their profile */
-    double *tau;          /* the total applied: actuator + passive + applied (+ constraint) */
+    double *tau;          /* the total applied: actuator + passive + applied (the constraint is apart) */
     double *act_force;    /* (nu) actuator torque after the motor envelope [N m | N] */
     double *act_velocity; /* (nu) transmission rate sum_j ratio_j qdot_j [rad/s | m/s] */
     double *body_fext;    /* (nbody x 6) external wrench [n about ref; f], from contacts and inputs */
@@ -184,7 +194,13 @@ typedef struct cd_data {
     double *fric_dir;     /* (nfric) slip direction (+1 / -1) anchored at the stick -> slip event */
     double *fric_force;   /* (nfric) friction torque on the joint */
 
-    /* the generic switch table: units 0..nsw-1 = slots, stops, frictions, user switches */
+    /* clutched fingers */
+    int *finger_mode;     /* (nfinger) cd_clutch_mode */
+    double *finger_brake; /* (nfinger) TORQUE_SWITCH: inner joint angle at the switch [rad] */
+    double *finger_load;  /* (nfinger) largest joint coupling torque [N m] (the clutch's load) */
+    double *finger_theta; /* (nfinger) schedule angle theta_s(t) [rad] */
+
+    /* the generic switch table: units 0..nsw-1 = slots, stops, frictions, fingers, user switches */
     double *sw_tswitch;   /* (nsw) time of the unit's last switch [s] */
     int *sw_nswitch;      /* (nsw) switches within `dwell` of the unit's last one (chattering guard) */
     int *sw_held;         /* (nsw) 1 while the guard suspends the unit's switches */

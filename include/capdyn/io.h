@@ -24,6 +24,16 @@ typedef struct {
     double output_dt;      /* sample interval of the results [s] */
     double flush_every;    /* wall-clock seconds between HDF5 flushes */
     int event_capacity;    /* event log ring size for cd_data_create */
+    /* work budget of a run (docs/scenario-format.md, [simulation]); the loader
+     * refuses a scenario whose least work exceeds max_rhs_evals; a runner
+     * (the CLI) stops the run when either is spent. 0 = no limit. */
+    double max_wall_time;  /* [s] wall-clock seconds, default 3600 */
+    double max_rhs_evals;  /* right-hand-side evaluations, default 1e9 */
+    double min_steps;      /* least number of integrator steps the run takes (estimate) */
+    double min_rhs_evals;  /* least number of right-hand-side evaluations (estimate) */
+    int capture_hand;      /* system of the [gripper]'s hand, -1 if none */
+    int capture_object;    /* the object it is to capture ([capture] object, or the first [[target]]), -1 */
+    double capture_v_max, capture_w_max, capture_dwell, capture_workspace; /* [capture] (verdict.h) */
 } cd_scenario;
 
 /* Loads, validates and builds a scenario. overrides are "key.path=value"

@@ -128,11 +128,14 @@ cd_options cd_options_default(void);
 cd_status cd_options_check(const cd_options *o, cd_error *err);
 
 /* ---- contact law ---------------------------------------------------------- */
-/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3), never pulling.
- * Tangential: stick  f_t = -(K_t z + D_t v_t)       (paper eq. 4, linear)
+/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3); no pull by
+ *             default, or plain Kelvin-Voigt (`pull`) until x returns to 0.
+ * Tangential: stick  f_t = -(K_t z^pt + D_t v_t^qt) (paper eq. 4, signed
+ *                    vector powers; pt = qt = 1: linear)
  *             slip   |f_t| = mu_k f_n against slip   (paper eq. 5)
  * stick -> slip when |f_t| > mu_s f_n; slip -> stick when the slip velocity
- * reverses. See docs/contact.md. */
+ * reverses. No friction while a `pull` contact is in tension (f_n < 0).
+ * p >= 1, q > 0, pt >= 1, qt > 0. See docs/contact.md. */
 typedef struct {
     double K, D, p, q;    /* [N/m^p], [N (s/m)^q], exponents (>= 1) */
     double Kt, Dt;        /* [N/m^pt], [N (s/m)^qt] tangential stick spring-damper */
@@ -182,6 +185,38 @@ typedef struct {
     double noload_speed;  /* [rad/s] of the transmission coordinate, > 0 with stall_torque */
 } cd_actuator_desc;
 cd_actuator_desc cd_actuator_desc_default(void);
+
+/* A clutched finger (paper sec. 4): its joints are driven through a stiff
+ * synchronising coupling (wire stiffness K_w, damping D_w) toward a closing
+ * angle schedule theta_s(t) until the coupling's load exceeds the clutch
+ * threshold (a located event per finger); then:
+ *  SPACE          Space Gripper: the plunger disengages the synchronising
+ *                 pulley and the equal-pressure wire mechanism takes over:
+ *                 joint j gets ratio_j x grasp_torque (constant).
+ *  TORQUE_SWITCH  Barrett TorqueSwitch: the inner (first) joint is braked at
+ *                 the angle it had at the switch (a stiff K_w, D_w brake); the
+ *                 outer joints go on following the schedule.
+ * Coupling torques are limited to torque_limit (the motor's current limit).
+ * After open_at (if > 0) the clutch re-engages where the schedule, turning
+ * back, has come back to the finger (the coupling would pull it open), and
+ * the schedule opens the finger. */
+typedef enum { CD_FINGER_SPACE = 0, CD_FINGER_TORQUE_SWITCH = 1, CD_FINGER_NTYPES } cd_finger_type;
+typedef struct {
+    const char *name;     /* copied; may be NULL */
+    cd_finger_type type;
+    int njoint;
+    const int *joint_body;/* (njoint) joint bodies, base to tip (copied) */
+    const double *sync;   /* (njoint) schedule gains: joint j follows sync_j theta_s (NULL: all 1) */
+    const double *ratio;  /* (njoint) equal-pressure split after the clutch (NULL: (n - j)^2, j = 0 base) */
+    double wire_K, wire_D;/* coupling stiffness [N m/rad] (> 0) and damping [N m s/rad] (>= 0) */
+    double threshold;     /* clutch load [N m] (> 0): the largest joint coupling torque */
+    double grasp_torque;  /* SPACE: torque scale after the clutch [N m] */
+    double torque_limit;  /* |coupling torque| limit [N m] (0 = none) */
+    const double *sched_t, *sched_q; /* theta_s(t) [s], [rad], piecewise linear, held at the ends (copied) */
+    int nsched;
+    double open_at;       /* [s] from then on, re-engage and open (0 = never) */
+} cd_finger_desc;
+cd_finger_desc cd_finger_desc_default(void);
 
 /* Passive joint elements, limits and prescribed motion of one joint. */
 typedef struct {
@@ -243,8 +278,9 @@ typedef struct cd_model {
     int nlim;             /* limited joints */
     int nfric;            /* joints with Coulomb friction */
     int nuser;            /* user switches (cd_model_set_user_switches) */
+    int nfinger;          /* clutched fingers (cd_model_add_finger) */
     int npresc;           /* prescribed joints + prescribed bases */
-    int nsw;              /* switch units: nslot + nlim + nfric + nuser (see docs/events.md) */
+    int nsw;              /* switch units: nslot + nlim + nfric + nfinger + nuser (docs/events.md) */
     int nv;               /* generalized velocities, all systems */
     int ny;               /* continuous state size (see docs/dynamics.md) */
     int ny_slot_adr;      /* where the per-slot tangential deflections start in y (3 each, shape-body axes) */
@@ -303,6 +339,15 @@ typedef struct cd_model {
     int *trn_body;        /* (ntrn) */
     double *trn_ratio;    /* (ntrn) */
     int *body_act;        /* (nbody) actuator set by cd_model_set_actuator on this joint, -1 */
+    /* clutched fingers */
+    char **finger_name;
+    int *finger_type;     /* cd_finger_type */
+    int *finger_jnt_adr, *finger_jnt_n; /* into fjnt_* */
+    int *fjnt_body;       /* joint bodies of all fingers */
+    double *fjnt_sync, *fjnt_ratio;
+    double *finger_prm;   /* (nfinger x 6) wire_K, wire_D, threshold, grasp_torque, torque_limit, open_at */
+    int *finger_tbl_adr, *finger_tbl_n; /* schedule rows in tbl_t / tbl_v */
+    int nfjnt;
     double *tbl_t, *tbl_v;
     int nbreak;           /* time events of the schedules (TABLE/STEPS rows, waypoints), sorted, unique */
     double *breaks;       /* (nbreak) [s] */
@@ -369,6 +414,8 @@ cd_status cd_model_set_joint(cd_model *m, int body, const cd_joint_props *p, cd_
  * of the base CoM) and angular velocity w (world) from t = 0, exactly (the
  * base then moves like a test rig; the wrench it takes is in d->qfrc_constraint). */
 cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const double w[3], cd_error *err);
+/* Adds a clutched finger; returns its id or -1 with err. */
+int cd_model_add_finger(cd_model *m, const cd_finger_desc *f, cd_error *err);
 /* Reserves n user switches (cd_data_set_user_switches gives their functions). */
 cd_status cd_model_set_user_switches(cd_model *m, int n, cd_error *err);
 /* Actuator id by name; -1 if none. */

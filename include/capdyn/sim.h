@@ -101,10 +101,12 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end,
  * is cd_sim_advance to that time. With opt.max_evals > 0 the call never
  * spends more evaluations than that: an event is then landed at the end of
  * its current bracket (stats.nwarn_budget counts it); CD_EBUDGET if the
- * budget cannot cover the step itself. */
+ * budget cannot cover one step with an event (20 evaluations: the re-check
+ * after a changed input 5, the step 4, the event's bracket start 1 and a
+ * reserve of 10 for the landing, the mode cascade and the rest of the step).
+ * A schedule breakpoint inside the step splits it: 4 more evaluations each. */
 cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err);
 
-/* Proposes a contact law by the paper's rule; see cd_contact_law_from_rule. */
 
 #ifdef __cplusplus
 }

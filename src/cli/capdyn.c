@@ -41,12 +41,35 @@ static const char *top_help =
     "'capdyn COMMAND --help' describes a command; docs/cli.md is the manual.\n"
     "exit status: 0 success, 1 runtime error, 2 bad command line, 130 interrupted.\n";
 
+/* Writes msg with its control characters escaped (\n, \t, \r, \xNN; C1
+ * controls in UTF-8 as \u00NN): a message that quotes a file name or an
+ * argument stays one line and cannot drive the terminal. */
+static void put_escaped(const char *msg)
+{
+    const unsigned char *p = (const unsigned char *)msg;
+    for (; *p; p++) {
+        if (*p == '\n') fputs("\\n", stderr);
+        else if (*p == '\t') fputs("\\t", stderr);
+        else if (*p == '\r') fputs("\\r", stderr);
+        else if (*p < 0x20 || *p == 0x7f) fprintf(stderr, "\\x%02x", *p);
+        else if (*p == 0xc2 && p[1] >= 0x80 && p[1] <= 0x9f) fprintf(stderr, "\\u%04x", *++p);
+        else fputc(*p, stderr);
+    }
+}
+
+static void vmessage(const char *fmt, va_list ap)
+{
+    char buf[4096];
+    vsnprintf(buf, sizeof buf, fmt, ap);
+    fputs("capdyn: error: ", stderr);
+    put_escaped(buf);
+}
+
 void cli_error(const char *fmt, ...)
 {
     va_list ap;
-    fputs("capdyn: error: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vmessage(fmt, ap);
     va_end(ap);
     fputc('\n', stderr);
 }
@@ -54,9 +77,8 @@ void cli_error(const char *fmt, ...)
 int cli_usage(const char *cmd, const char *fmt, ...)
 {
     va_list ap;
-    fputs("capdyn: error: ", stderr);
     va_start(ap, fmt);
-    vfprintf(stderr, fmt, ap);
+    vmessage(fmt, ap);
     va_end(ap);
     if (cmd) fprintf(stderr, " (see 'capdyn %s --help')\n", cmd);
     else fputs(" (see 'capdyn --help')\n", stderr);

@@ -8,6 +8,7 @@
  * stops the run when SIGINT/SIGTERM set the flag. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "capdyn/verdict.h"
 
 #include <math.h>
 #include <signal.h>
@@ -36,15 +37,20 @@ static const char *run_help =
     "step budget) the file keeps everything up to the failure; exit status 1.\n"
     "If the results file cannot be written (disk full, file size limit), the run\n"
     "stops with one error line naming the file and exit status 1; the file keeps\n"
-    "the samples committed before (docs/results-format.md, 'When writing fails').\n";
+    "the samples committed before (docs/results-format.md, 'When writing fails').\n"
+    "A run that spends its work budget (simulation.max_wall_time, max_rhs_evals)\n"
+    "stops like an integrator failure: results kept, exit status 1.\n";
 
 static const char *check_help =
     "usage: capdyn check SCENARIO.toml [--set KEY=VALUE ...]\n"
     "\n"
     "Loads and validates the scenario (with its includes and overrides) and builds\n"
     "the model, without simulating. Prints one line: systems, bodies, joints,\n"
-    "check points, shapes, contact slots and state size. Exit status 1 (and the\n"
-    "loader's FILE:LINE:COLUMN message) if the scenario is invalid.\n";
+    "check points, shapes, contact slots and state size; and a second line: the\n"
+    "least work of the run (steps, right-hand-side evaluations) and its budget\n"
+    "(simulation.max_rhs_evals, max_wall_time). Exit status 1 (and the loader's\n"
+    "FILE:LINE:COLUMN message) if the scenario is invalid or its least work\n"
+    "exceeds max_rhs_evals.\n";
 
 static volatile sig_atomic_t g_signal = 0;
 static void on_signal(int sig) { g_signal = sig; }
@@ -66,6 +72,10 @@ typedef struct {
     double t_end, wall0, last_draw;
     double *fn_max, *ft_max;
     int drawn;
+    /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
+     * the step callback stops the run and writes why in budget_msg */
+    double max_wall, max_rhs;
+    char budget_msg[256];
 } run_ctx;
 
 static void draw_progress(run_ctx *c, const cd_data *d, double now)
@@ -98,7 +108,23 @@ static int step_cb(const cd_model *m, cd_data *d, void *user)
 {
     run_ctx *c = (run_ctx *)user;
     int k;
+    double now = -1;
     if (g_signal) return 1;
+    if (c->max_rhs > 0 && (double)d->stats.nrhs > c->max_rhs) {
+        snprintf(c->budget_msg, sizeof c->budget_msg,
+                 "work budget spent: %ld right-hand-side evaluations, more than simulation.max_rhs_evals = %g, at t = %.9g s",
+                 d->stats.nrhs, c->max_rhs, d->t);
+        return 1;
+    }
+    if (c->max_wall > 0) {
+        now = cli_wall();
+        if (now - c->wall0 > c->max_wall) {
+            snprintf(c->budget_msg, sizeof c->budget_msg,
+                     "work budget spent: %.1f s of wall-clock time, more than simulation.max_wall_time = %g s, at t = %.9g s",
+                     now - c->wall0, c->max_wall, d->t);
+            return 1;
+        }
+    }
     for (k = 0; k < m->nslot; k++) {
         const double *ft = d->slot_ft + 3 * k;
         double a = sqrt(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]);
@@ -106,7 +132,7 @@ static int step_cb(const cd_model *m, cd_data *d, void *user)
         if (a > c->ft_max[k]) c->ft_max[k] = a;
     }
     if (c->progress) {
-        double now = cli_wall();
+        if (now < 0) now = cli_wall();
         if (now - c->last_draw >= 0.1) draw_progress(c, d, now);
     }
     return 0;
@@ -173,6 +199,19 @@ static void default_output(const char *scenario, char *out, size_t len)
     snprintf(out, len, "%.*s.h5", (int)n, b);
 }
 
+/* The least work of the run (the loader's estimate) and its budget. */
+static void print_budget(const cd_scenario *sc)
+{
+    char rhs[32], wall[32];
+    if (sc->max_rhs_evals > 0) snprintf(rhs, sizeof rhs, "%g", sc->max_rhs_evals);
+    else snprintf(rhs, sizeof rhs, "none");
+    if (sc->max_wall_time > 0) snprintf(wall, sizeof wall, "%g s", sc->max_wall_time);
+    else snprintf(wall, sizeof wall, "none");
+    printf("work: at least %.6g steps and %.6g right-hand-side evaluations; budget: max_rhs_evals %s, "
+           "max_wall_time %s\n",
+           sc->min_steps, sc->min_rhs_evals, rhs, wall);
+}
+
 int cmd_check(int argc, char **argv)
 {
     run_opts o;
@@ -196,6 +235,7 @@ int cmd_check(int argc, char **argv)
            "state size %d; %g s, output every %g s\n",
            o.scenario, sc->title ? sc->title : "", m->nsys, m->nsys == 1 ? "" : "s", m->nbody, njoint, m->ncp,
            m->nshape, m->nslot, m->ny, sc->duration, sc->output_dt);
+    print_budget(sc);
     cd_scenario_free(sc);
     return CLI_OK;
 }
@@ -209,6 +249,8 @@ int cmd_run(int argc, char **argv)
     cd_h5_writer *w;
     cd_error err, werr;
     cd_status st = CD_OK, cst;
+    cd_monitor mon;
+    int have_mon = 0;
     run_ctx ctx;
     char outbuf[1024], msg[768], wmsg[512];
     const char *out;
@@ -290,6 +332,8 @@ int cmd_run(int argc, char **argv)
     ctx.wall0 = cli_wall();
     ctx.last_draw = -1e300;
     ctx.progress = !o.quiet && isatty(STDERR_FILENO);
+    ctx.max_wall = sc->max_wall_time;
+    ctx.max_rhs = sc->max_rhs_evals;
     if (!ctx.fn_max || !ctx.ft_max) {
         cli_error("out of memory");
         cd_h5_close(w, m, d, CD_ENOMEM, "out of memory", NULL);
@@ -299,6 +343,23 @@ int cmd_run(int argc, char **argv)
         cd_data_free(d);
         cd_scenario_free(sc);
         return CLI_FAIL;
+    }
+    /* the capture verdict, when the scenario has a gripper and an object */
+    have_mon = sc->capture_hand >= 0 && sc->capture_object >= 0;
+    if (have_mon) {
+        cd_monitor_opts mop = cd_monitor_opts_default();
+        mop.hand = sc->capture_hand;
+        mop.object = sc->capture_object;
+        mop.v_max = sc->capture_v_max;
+        mop.w_max = sc->capture_w_max;
+        mop.dwell = sc->capture_dwell;
+        mop.workspace = sc->capture_workspace;
+        if (cd_monitor_init(&mon, m, d, &mop, &err) != CD_OK) {
+            cli_error("%s", err.msg);
+            have_mon = 0;
+        } else {
+            cd_monitor_update(&mon, m, d);
+        }
     }
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, &ctx);
@@ -320,6 +381,7 @@ int cmd_run(int argc, char **argv)
         if (st != CD_OK) break;
         st = cd_h5_append(w, m, d, &werr);
         if (st != CD_OK) { err = werr; break; }
+        if (have_mon) cd_monitor_update(&mon, m, d);
         t_last_sample = d->t;
         if (cli_wall() - last_flush >= sc->flush_every) {
             st = cd_h5_flush(w, &werr);
@@ -328,6 +390,7 @@ int cmd_run(int argc, char **argv)
         }
         if (g_signal) { st = CD_EINTERRUPT; break; }
     }
+    if (st == CD_EINTERRUPT && ctx.budget_msg[0]) snprintf(err.msg, sizeof err.msg, "%s", ctx.budget_msg);
     if (st != CD_OK && err.msg[0] == 0) snprintf(err.msg, sizeof err.msg, "%s at t = %.9g s", cd_status_string(st), d->t);
     /* the writer's errors are the only CD_EIO of a run */
     if (st == CD_EIO) snprintf(wmsg, sizeof wmsg, "%s", err.msg);
@@ -363,6 +426,16 @@ int cmd_run(int argc, char **argv)
             x.ft_max = ctx.ft_max;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
+            if (have_mon) {
+                printf("capture     %s", cd_verdict_name(mon.verdict));
+                if (mon.verdict == CD_VERDICT_CAPTURED) printf(" at t = %.6g s", mon.t_capture);
+                if (mon.verdict == CD_VERDICT_ESCAPED) printf(" at t = %.6g s", mon.t_escape);
+                printf(": object '%s' in hand '%s'\n", m->sys_name[mon.opt.object], m->sys_name[mon.opt.hand]);
+                printf("            peak contact force %.6g N, peak joint torque %.6g N m; at the end: %d contacts "
+                       "(%d stick, %d slip), offset from the palm %.6g m, %s, relative speed %.3g m/s, %.3g rad/s\n",
+                       mon.peak_fn, mon.peak_tau, mon.n_stick + mon.n_slip, mon.n_stick, mon.n_slip, mon.offset_norm,
+                       mon.enclosed ? "enclosed" : "not enclosed", mon.v_rel, mon.w_rel);
+            }
         } else {
             cli_error("reading back '%s': %s", out, rerr.msg);
         }

@@ -172,8 +172,8 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
                 cd_v3_copy(u, va);
                 cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
                 nu = cd_v3_norm(u);
-                /* eq. (5): Coulomb, against the slip */
-                if (nu > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
+                /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
+                if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
             }
         }
         if (d->slot_held[k] && mode != CD_MODE_OPEN) {
@@ -231,8 +231,9 @@ void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, 
     }
     g[0] = gn;
     if (mode == CD_MODE_STICK) {
-        g[1] = L->mu_s * d->slot_fn[k] - cd_v3_norm(d->slot_ft + 3 * k);
-        if (forgive && g[1] >= -1e-9 * L->mu_s * d->slot_fn[k]) g[1] = 0;
+        double fc = d->slot_fn[k] > 0 ? d->slot_fn[k] : 0.0; /* a pulling contact holds no friction */
+        g[1] = L->mu_s * fc - cd_v3_norm(d->slot_ft + 3 * k);
+        if (forgive && g[1] >= -1e-9 * L->mu_s * fc) g[1] = 0;
     } else {
         const double *n = d->slot_normal + 3 * k;
         double st[3];

@@ -9,10 +9,10 @@
 #include "capdyn/sim.h"
 
 /* Systems with this many generalized velocities or more use ABA. Measured
- * (bench/bench_speed.c, 2026-11-24, docs/performance.md): ABA is faster than
- * CRBA + Cholesky at every size tried, from a single free body (6 DoF, 210 vs
- * 254 ns with kinematics) and a 1-joint fixed base (228 vs 243 ns) up to 64
- * joints (11.4 vs 43.5 us): the CRBA path forms every body's spatial inertia
+ * (bench/bench_speed.c, bench/results/2026-11-24.txt, docs/performance.md):
+ * ABA is faster than CRBA + Cholesky at every size tried, from a single free
+ * body (6 DoF, 200 vs 254 ns with kinematics, minima) and a 1-joint fixed
+ * base (211 vs 238 ns) up to 64 joints (10.7 vs 42.8 us): the CRBA path forms every body's spatial inertia
  * twice (RNE bias, then H) and adds the O(n^3) factorisation, while ABA forms
  * them once. So ABA is the default everywhere; CRBA stays available
  * (cd_forward_dynamics_method) and behind cd_mass_matrix. Re-measure with

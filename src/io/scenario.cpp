@@ -40,6 +40,7 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -278,29 +279,50 @@ const std::string *name_of(Node &t)
 
 /* ---- includes -------------------------------------------------------------------- */
 
+/* A copy of a tree that shares no node with it (merging mutates the base);
+ * adds the number of nodes copied to *count. */
+NodeP deep_copy(const Node &n, unsigned long long *count)
+{
+    auto c = std::make_shared<Node>(n);
+    ++*count;
+    for (auto &e : c->tab) e.val = deep_copy(*e.val, count);
+    for (auto &a : c->arr) a = deep_copy(*a, count);
+    return c;
+}
+
 /* Deep merge of `over` into `base` (over wins). Tables merge key by key; arrays
  * of tables merge element by element on `name` (a named element of `over`
- * updates the element of `base` with that name, any other is appended);
- * every other value is replaced. */
+ * updates the first element of `base` with that name, any other is appended);
+ * every other value is replaced. Keys and names are looked up in hash maps:
+ * a table of 10^5 keys or 10^5 named elements merges in linear time. */
 void merge_into(Node &base, Node &over)
 {
+    std::unordered_map<std::string, size_t> at;
+    for (size_t i = 0; i < base.tab.size(); i++) at.emplace(base.tab[i].key, i);
     for (auto &e : over.tab) {
-        Entry *b = base.find(e.key);
-        if (!b) {
+        auto it = at.find(e.key);
+        if (it == at.end()) {
+            at.emplace(e.key, base.tab.size());
             base.tab.push_back(e);
-        } else if (b->val->kind == NK::Table && e.val->kind == NK::Table) {
+            continue;
+        }
+        Entry *b = &base.tab[it->second];
+        if (b->val->kind == NK::Table && e.val->kind == NK::Table) {
             merge_into(*b->val, *e.val);
         } else if (is_aot(*b->val) && is_aot(*e.val)) {
+            std::unordered_map<std::string, size_t> named;
+            auto &arr = b->val->arr;
+            for (size_t j = 0; j < arr.size(); j++)
+                if (const std::string *xn = name_of(*arr[j])) named.emplace(*xn, j);
             for (auto &o : e.val->arr) {
                 const std::string *on = name_of(*o);
-                Node *match = nullptr;
-                if (on)
-                    for (auto &x : b->val->arr) {
-                        const std::string *xn = name_of(*x);
-                        if (xn && *xn == *on) { match = x.get(); break; }
-                    }
-                if (match) merge_into(*match, *o);
-                else b->val->arr.push_back(o);
+                auto hit = on ? named.find(*on) : named.end();
+                if (hit != named.end()) {
+                    merge_into(*arr[hit->second], *o);
+                } else {
+                    if (on) named.emplace(*on, arr.size());
+                    arr.push_back(o);
+                }
             }
         } else {
             *b = e;
@@ -312,6 +334,153 @@ void merge_into(Node &base, Node &over)
 const double CD_SCENARIO_MAX_SAMPLES = 1e9;
 /* The largest scenario file (main or included) the loader reads. */
 const unsigned long long CD_SCENARIO_MAX_BYTES = 16ull << 20;
+
+/* ---- input bounds (docs/scenario-format.md "Limits", docs/reliability.md) ----
+ * Whatever the input, loading ends in bounded time and stack: the loader,
+ * toml++ (3.3 has no depth limit for dotted keys and table headers; its
+ * parser and its destructors recurse once per level) and our own tree walks
+ * recurse once per nesting level, so the nesting is bounded before the text
+ * reaches toml++; includes are bounded in depth and in total bytes, and a
+ * file included twice is read and parsed once. Tested in
+ * tests/test_loader_limits.c, at a 256 KiB stack. */
+const int CD_MAX_INCLUDE_DEPTH = 32;                 /* nested include levels below the main file */
+const unsigned long long CD_MAX_TOTAL_BYTES = 64ull << 20; /* the main file and all includes */
+const int CD_MAX_KEY_NAMES = 32;                     /* names in one dotted key or table header */
+const int CD_MAX_NESTING = 64;                       /* tables, dotted keys, arrays, inline tables together */
+const size_t CD_MAX_HULL_VERTICES = 128;             /* the hull is built by an O(n^4) search */
+const size_t CD_MAX_TOTAL_HULL_VERTICES = 2048;      /* all convex shapes together */
+const unsigned long long CD_MAX_REUSED_VALUES = 10000000; /* values copied for files included again */
+
+bool is_bare(char c) { return std::isalnum((unsigned char)c) || c == '_' || c == '-'; }
+
+/* The light lexer that bounds what reaches toml++. It follows strings
+ * (basic, literal, multi-line), comments, table headers, keys and the
+ * [ { } ] of values, and measures each value's depth: the names of the
+ * current table header, plus the names of the dotted key, plus one per
+ * enclosing array or inline table. It does not validate anything else
+ * (toml++ does, with its own messages). loc_of maps an offset to the
+ * location reported. */
+template <class LocOf> void prescan(const std::string &s, LocOf loc_of)
+{
+    struct Open { char c; int depth; };
+    std::vector<Open> st;
+    size_t i = 0, n = s.size();
+    int table_depth = 0, val_depth = 0;
+    bool expect_key = true;
+    auto too_deep = [&](size_t at, int d) {
+        if (d > CD_MAX_NESTING)
+            fail_at(loc_of(at), "", "expected values nested at most " + std::to_string(CD_MAX_NESTING) +
+                                        " levels deep (table header names, dotted key names, arrays and inline "
+                                        "tables together), got deeper");
+    };
+    /* skips the string starting at s[i] (a quote); false if unterminated */
+    auto skip_string = [&](size_t &j) -> bool {
+        char q = s[j];
+        bool multi = j + 2 < n && s[j + 1] == q && s[j + 2] == q;
+        j += multi ? 3 : 1;
+        while (j < n) {
+            char c = s[j];
+            if (c == '\\' && q == '"') { j += 2; continue; }
+            if (c == '\n' && !multi) return false;
+            if (c == q) {
+                if (!multi) { j++; return true; }
+                if (j + 2 < n && s[j + 1] == q && s[j + 2] == q) {
+                    j += 3;
+                    while (j < n && s[j] == q) j++; /* up to two quotes may close the content */
+                    return true;
+                }
+            }
+            j++;
+        }
+        return false;
+    };
+    /* counts the names of the key at s[j] (bare or quoted, separated by dots) */
+    auto scan_key = [&](size_t &j) -> int {
+        size_t start = j;
+        int names = 0;
+        for (;;) {
+            while (j < n && (s[j] == ' ' || s[j] == '\t')) j++;
+            if (j < n && (s[j] == '"' || s[j] == '\'')) {
+                if (!skip_string(j)) return names; /* toml++ reports it */
+            } else if (j < n && is_bare(s[j])) {
+                while (j < n && is_bare(s[j])) j++;
+            } else {
+                break;
+            }
+            names++;
+            while (j < n && (s[j] == ' ' || s[j] == '\t')) j++;
+            if (j < n && s[j] == '.') { j++; continue; }
+            break;
+        }
+        if (names > CD_MAX_KEY_NAMES) {
+            std::string shown = s.substr(start, std::min<size_t>(j - start, 40));
+            while (j - start > 40 && !shown.empty() && (shown.back() == '.' || shown.back() == ' ')) shown.pop_back();
+            fail_at(loc_of(start), shown + (j - start > 40 ? "..." : ""),
+                    "expected a key or table header of at most " + std::to_string(CD_MAX_KEY_NAMES) +
+                        " dotted names, got " + std::to_string(names));
+        }
+        return names;
+    };
+    while (i < n) {
+        char c = s[i];
+        if (c == '\n') {
+            if (st.empty()) expect_key = true;
+            i++;
+            continue;
+        }
+        if (c == ' ' || c == '\t' || c == '\r') { i++; continue; }
+        if (c == '#') {
+            while (i < n && s[i] != '\n') i++;
+            continue;
+        }
+        if (expect_key && st.empty() && c == '[') { /* [table] or [[array.of.tables]] */
+            bool aot = i + 1 < n && s[i + 1] == '[';
+            size_t at = i;
+            i += aot ? 2 : 1;
+            table_depth = scan_key(i) + (aot ? 1 : 0);
+            too_deep(at, table_depth);
+            expect_key = false;
+            continue;
+        }
+        if (expect_key && (st.empty() || st.back().c == '{') && (is_bare(c) || c == '"' || c == '\'')) {
+            size_t at = i;
+            int names = scan_key(i);
+            val_depth = (st.empty() ? table_depth : st.back().depth) + names;
+            too_deep(at, val_depth);
+            expect_key = false;
+            if (names == 0) i++;
+            continue;
+        }
+        switch (c) {
+        case '"':
+        case '\'':
+            if (!skip_string(i)) return;
+            continue;
+        case '[': /* an array at depth val_depth: its elements one deeper */
+            st.push_back({c, val_depth});
+            val_depth++;
+            too_deep(i, val_depth);
+            break;
+        case '{': /* an inline table: its keys' names add to its depth */
+            st.push_back({c, val_depth});
+            expect_key = true;
+            break;
+        case ',':
+            if (!st.empty() && st.back().c == '{') expect_key = true;
+            else if (!st.empty()) val_depth = st.back().depth + 1;
+            break;
+        case ']':
+        case '}':
+            if (!st.empty()) st.pop_back();
+            if (!st.empty() && st.back().c == '[') val_depth = st.back().depth + 1;
+            expect_key = false;
+            break;
+        default:
+            break;
+        }
+        i++;
+    }
+}
 
 std::string file_kind(mode_t m)
 {
@@ -340,14 +509,55 @@ std::string too_large(unsigned long long bytes)
 }
 
 struct FileLoader {
-    std::string text;                /* main file, then each include with a header line */
-    std::vector<std::string> stack;  /* canonical paths being loaded (cycle detection) */
+    std::string text;                /* main file, then each include (once) with a header line */
+    std::vector<std::string> stack;  /* canonical paths being loaded (cycle detection, depth) */
+    std::vector<std::string> shown;  /* the same paths as written, for messages */
+    /* a file included again (a diamond) is not read or parsed again: its
+     * merged tree is copied from here, so includes take time linear in the
+     * number of include entries, not exponential in the depth */
+    std::unordered_map<std::string, NodeP> done;
+    unsigned long long total = 0;    /* bytes read so far, all files */
+    unsigned long long reused = 0;   /* values copied from the cache so far */
 
     static std::string canon(const std::string &p)
     {
         std::error_code ec;
         auto c = std::filesystem::weakly_canonical(std::filesystem::path(p), ec);
         return ec ? p : c.string();
+    }
+
+    /* Reads a whole regular file of at most CD_SCENARIO_MAX_BYTES (a device
+     * such as /dev/zero, a FIFO or a directory would make the read hang,
+     * never end or fail obscurely). The buffer is on the heap: a chain of
+     * includes costs little stack per level. */
+    std::string read(const std::string &path, const Loc *from, const std::string &from_key)
+    {
+        std::string content;
+        struct stat sb;
+        if (::stat(path.c_str(), &sb) != 0) refuse(path, from, from_key, std::strerror(errno));
+        if (!S_ISREG(sb.st_mode)) refuse(path, from, from_key, "not a regular file (" + file_kind(sb.st_mode) + ")");
+        if ((unsigned long long)sb.st_size > CD_SCENARIO_MAX_BYTES)
+            refuse(path, from, from_key, too_large((unsigned long long)sb.st_size));
+        FILE *f = std::fopen(path.c_str(), "rb");
+        if (!f) refuse(path, from, from_key, std::strerror(errno));
+        std::unique_ptr<FILE, int (*)(FILE *)> closer(f, std::fclose);
+        content.reserve((size_t)sb.st_size);
+        std::vector<char> buf(65536);
+        size_t n;
+        while ((n = std::fread(buf.data(), 1, buf.size(), f)) > 0) {
+            content.append(buf.data(), n);
+            if (content.size() > CD_SCENARIO_MAX_BYTES) /* it grew since stat */
+                refuse(path, from, from_key, too_large((unsigned long long)content.size()));
+        }
+        if (std::ferror(f)) refuse(path, from, from_key, "read error");
+        total += content.size();
+        if (total > CD_MAX_TOTAL_BYTES) {
+            char b[160];
+            std::snprintf(b, sizeof b, "the scenario and its includes together exceed %llu MiB (%llu bytes read)",
+                          CD_MAX_TOTAL_BYTES >> 20, total);
+            refuse(path, from, from_key, b);
+        }
+        return content;
     }
 
     /* Loads path (and its includes); from/from_key locate the include entry
@@ -358,38 +568,38 @@ struct FileLoader {
         for (size_t i = 0; i < stack.size(); i++)
             if (stack[i] == cpath) {
                 std::string cyc;
-                for (size_t j = i; j < stack.size(); j++) cyc += stack[j] + " -> ";
-                fail_at(*from, from_key, "include cycle: " + cyc + cpath);
+                for (size_t j = i; j < stack.size(); j++) cyc += shown[j] + " -> ";
+                fail_at(*from, from_key, "include cycle: " + cyc + path + " (expected a file that does not include itself)");
             }
-        /* read the whole file: a regular file of at most CD_SCENARIO_MAX_BYTES
-         * (a device such as /dev/zero, a FIFO or a directory would make the
-         * read hang, never end or fail obscurely) */
-        std::string content;
-        {
-            struct stat sb;
-            if (::stat(path.c_str(), &sb) != 0) refuse(path, from, from_key, std::strerror(errno));
-            if (!S_ISREG(sb.st_mode)) refuse(path, from, from_key, "not a regular file (" + file_kind(sb.st_mode) + ")");
-            if ((unsigned long long)sb.st_size > CD_SCENARIO_MAX_BYTES)
-                refuse(path, from, from_key, too_large((unsigned long long)sb.st_size));
-            FILE *f = std::fopen(path.c_str(), "rb");
-            if (!f) refuse(path, from, from_key, std::strerror(errno));
-            char buf[65536];
-            size_t n;
-            bool big = false;
-            while ((n = std::fread(buf, 1, sizeof buf, f)) > 0) {
-                content.append(buf, n);
-                if (content.size() > CD_SCENARIO_MAX_BYTES) { big = true; break; } /* it grew since stat */
-            }
-            bool bad = std::ferror(f) != 0;
-            std::fclose(f);
-            if (big) refuse(path, from, from_key, too_large((unsigned long long)content.size()));
-            if (bad) refuse(path, from, from_key, "read error");
+        auto hit = done.find(cpath);
+        if (hit != done.end()) {
+            /* a file included again costs its values, not its bytes: bounded
+             * too (include = ["b.toml", "b.toml", ... 10^6 times]) */
+            NodeP c = deep_copy(*hit->second, &reused);
+            if (reused > CD_MAX_REUSED_VALUES)
+                fail_at(*from, from_key,
+                        "expected includes that repeat at most 10^7 values in all, got more (file '" + path +
+                            "' included again and again)");
+            return c;
         }
+        if (from && stack.size() > (size_t)CD_MAX_INCLUDE_DEPTH)
+            fail_at(*from, from_key,
+                    "expected includes nested at most " + std::to_string(CD_MAX_INCLUDE_DEPTH) + " levels deep, got " +
+                        shown[0] + " -> " + shown[1] + " -> ... -> " + shown.back() + " -> " + path);
+        std::string content = read(path, from, from_key);
         if (from) text += "\n# ---- included file: " + path + " ----\n";
         text += content;
 
         Str file = std::make_shared<const std::string>(path);
         NodeP root;
+        prescan(content, [&](size_t at) {
+            Loc l;
+            l.file = file;
+            l.line = 1 + (int)std::count(content.begin(), content.begin() + (long)at, '\n');
+            size_t nl = content.rfind('\n', at == 0 ? 0 : at - 1);
+            l.col = (int)(at - (nl == std::string::npos || at == 0 ? 0 : nl + 1)) + 1;
+            return l;
+        });
         try {
             toml::table t = toml::parse(std::string_view(content), std::string_view(path));
             Loc top;
@@ -406,7 +616,11 @@ struct FileLoader {
         }
 
         Entry *inc = root->find("include");
-        if (!inc) return root;
+        if (!inc) {
+            unsigned long long n = 0;
+            if (from) done.emplace(cpath, deep_copy(*root, &n)); /* the main file is never included again */
+            return root;
+        }
         std::vector<std::pair<std::string, Loc>> incs;
         Node &iv = *inc->val;
         if (iv.kind == NK::String) {
@@ -426,6 +640,7 @@ struct FileLoader {
         merged->loc = root->loc;
         std::filesystem::path dir = std::filesystem::path(path).parent_path();
         stack.push_back(cpath);
+        shown.push_back(path);
         for (size_t i = 0; i < incs.size(); i++) {
             std::filesystem::path p(incs[i].first);
             std::string resolved = p.is_absolute() ? p.string() : (dir / p).string();
@@ -434,8 +649,11 @@ struct FileLoader {
             merge_into(*merged, *child);
         }
         stack.pop_back();
+        shown.pop_back();
         root->tab.erase(root->tab.begin() + (inc - root->tab.data()));
         merge_into(*merged, *root);
+        unsigned long long n = 0;
+        if (from) done.emplace(cpath, deep_copy(*merged, &n));
         return merged;
     }
 };
@@ -455,8 +673,10 @@ std::string trim(const std::string &s)
 NodeP parse_override_value(const std::string &value, const Loc &L)
 {
     NodeP out;
+    std::string doc = "v = " + value;
+    prescan(doc, [&](size_t) { return L; });
     try {
-        toml::table t = toml::parse(std::string_view("v = " + value), std::string_view("--set"));
+        toml::table t = toml::parse(std::string_view(doc), std::string_view("--set"));
         if (t.size() == 1 && t.contains("v")) {
             out = convert(*t.get("v"), nullptr, L);
         }
@@ -505,7 +725,11 @@ void apply_override(NodeP &root, const std::string &ov)
             std::string num = j == std::string::npos ? "" : path.substr(i + 1, j - i - 1);
             if (num.empty() || num.find_first_not_of("0123456789") != std::string::npos)
                 fail_at(L, "", "bad index in key path '" + path + "' (expected [N], N >= 0)");
-            s.ix.push_back((size_t)std::stoul(num));
+            /* at most 9 digits: no array of the loader has 10^9 elements,
+             * and the conversion cannot overflow */
+            if (num.size() > 9)
+                fail_at(L, "", "bad index [" + num + "] in key path '" + path + "' (expected [N], 0 <= N < 10^9)");
+            s.ix.push_back((size_t)std::strtoul(num.c_str(), nullptr, 10));
             i = j + 1;
         }
         segs.push_back(s);
@@ -516,6 +740,9 @@ void apply_override(NodeP &root, const std::string &ov)
         }
     }
     if (segs[0].id == "include") fail_at(L, "", "'include' cannot be changed by --set");
+    if (segs.size() > (size_t)CD_MAX_KEY_NAMES)
+        fail_at(L, "", "expected a key path of at most " + std::to_string(CD_MAX_KEY_NAMES) + " names, got " +
+                           std::to_string(segs.size()));
 
     NodeP value_node = parse_override_value(value, L);
     NodeP *slot = &root;
@@ -831,6 +1058,51 @@ void rotation_of(const Tab &t, double R[9], const char *extra_exclusive = nullpt
     }
 }
 
+/* A convex shape's vertices must span a volume. The greedy tetrahedron (a
+ * vertex; the farthest from it; the farthest from their line; the farthest
+ * from their plane) must be thicker than 1e-6 of the hull's size (the
+ * model's hull search, src/model/model.c, takes 1e-9 of it as flat). Checked
+ * here, in O(n), so that the message names the table and key rather than
+ * the model's finalize step. */
+void hull_volume_check(const std::vector<double> &v, const Node &vn, const std::string &path)
+{
+    size_t n = v.size() / 3, i, a = 0, b = 0, c = 0;
+    double ctr[3] = {0, 0, 0}, size = 0, best, e1[3], nrm[3], t[3];
+    for (i = 0; i < n; i++) cd_v3_axpy(ctr, 1.0 / (double)n, &v[3 * i]);
+    for (i = 0; i < n; i++) {
+        cd_v3_sub(t, &v[3 * i], ctr);
+        size = std::max(size, cd_v3_norm(t));
+    }
+    std::string what = "expected vertices spanning a volume (not all on one plane), got ";
+    if (!(size > 0)) fail_at(vn.loc, path, what + "a single point");
+    best = -1;
+    for (i = 0; i < n; i++) {
+        cd_v3_sub(t, &v[3 * i], &v[0]);
+        if (cd_v3_norm(t) > best) { best = cd_v3_norm(t); b = i; }
+    }
+    cd_v3_sub(e1, &v[3 * b], &v[3 * a]);
+    cd_v3_normalize(e1);
+    best = -1;
+    for (i = 0; i < n; i++) {
+        double w[3];
+        cd_v3_sub(t, &v[3 * i], &v[3 * a]);
+        cd_v3_cross(w, t, e1);
+        if (cd_v3_norm(w) > best) { best = cd_v3_norm(w); c = i; }
+    }
+    if (!(best > 1e-6 * size)) fail_at(vn.loc, path, what + "points on one line");
+    cd_v3_sub(t, &v[3 * c], &v[3 * a]);
+    cd_v3_cross(nrm, e1, t);
+    cd_v3_normalize(nrm);
+    best = 0;
+    for (i = 0; i < n; i++) {
+        cd_v3_sub(t, &v[3 * i], &v[3 * a]);
+        best = std::max(best, std::fabs(cd_v3_dot(t, nrm)));
+    }
+    if (!(best > 1e-6 * size))
+        fail_at(vn.loc, path, what + "points on one plane (thickness " + fmt_num(best) + " m for a size of " +
+                                  fmt_num(size) + " m)");
+}
+
 /* Rotation taking +z onto the unit vector n (the smallest rotation). */
 void rot_z_to(const double nin[3], double R[9])
 {
@@ -862,10 +1134,32 @@ struct BodyInfo {
 struct SysInfo {
     std::string name;
     int id;
+    bool is_target = false;
     Loc loc;
     std::string path;
     std::vector<BodyInfo> bodies;  /* base first (named "base" here) */
     std::vector<std::pair<std::string, int>> shapes;
+    /* name -> index in bodies / shapes: a system of 10^5 links or shapes,
+     * and 10^5 pairs naming them, build in linear time */
+    std::unordered_map<std::string, size_t> body_at, shape_at;
+    int ncp = 0;                   /* check points on all its bodies */
+    std::vector<std::string> body_names() const
+    {
+        std::vector<std::string> v;
+        for (auto &b : bodies) v.push_back(b.name);
+        return v;
+    }
+    std::vector<std::string> shape_names() const
+    {
+        std::vector<std::string> v;
+        for (auto &x : shapes) v.push_back(x.first);
+        return v;
+    }
+    void add_body(const std::string &n, int id)
+    {
+        body_at.emplace(n, bodies.size());
+        bodies.push_back(BodyInfo{n, id, 0});
+    }
 };
 
 struct LawState {
@@ -878,6 +1172,8 @@ const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "p_
 struct Builder {
     std::unique_ptr<cd_model, ModelDel> m;
     std::vector<SysInfo> sys;
+    std::unordered_map<std::string, size_t> sys_at;
+    size_t hull_vertices = 0;  /* all convex shapes so far */
     cd_error err{};
     Loc file_loc;
 
@@ -895,13 +1191,12 @@ struct Builder {
     }
     SysInfo *find_sys(const std::string &n)
     {
-        for (auto &s : sys)
-            if (s.name == n) return &s;
-        return nullptr;
+        auto it = sys_at.find(n);
+        return it == sys_at.end() ? nullptr : &sys[it->second];
     }
 
     /* checkpoints = [[x, y, z, r], ...] on body b */
-    void checkpoints(const Tab &t, BodyInfo &b)
+    void checkpoints(const Tab &t, SysInfo &s, BodyInfo &b)
     {
         Entry *e = t.get("checkpoints");
         if (!e) return;
@@ -914,6 +1209,7 @@ struct Builder {
             if (!(v[3] >= 0)) fail_at(a.arr[i]->arr[3]->loc, idx(idx(p, i), 3), "expected a radius >= 0, got " + fmt_num(v[3]));
             if (cd_model_add_checkpoint(m.get(), b.id, v, v[3], &err) < 0) builder_fail(a.arr[i]->loc, idx(p, i));
             b.ncp++;
+            s.ncp++;
         }
     }
 
@@ -925,10 +1221,9 @@ struct Builder {
         if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
         else if (default_name) name = default_name;
         else t.need("name", "a name (shapes are referenced as \"system/name\")");
-        for (auto &sh : s.shapes)
-            if (sh.first == name)
-                fail_at(t.get("name") ? t.get("name")->val->loc : node.loc, t.kp("name"),
-                        "expected a shape name unique in system '" + s.name + "', got '" + name + "' twice");
+        if (s.shape_at.count(name))
+            fail_at(t.get("name") ? t.get("name")->val->loc : node.loc, t.kp("name"),
+                    "expected a shape name unique in system '" + s.name + "', got '" + name + "' twice");
         std::vector<std::string> types = {"plane", "sphere", "box", "cylinder", "capsule", "convex"};
         std::string ty = choice_of(t.need("type", "one of " + list(types)), t.kp("type"), types);
         int type = cd_shape_type_from_name(ty.c_str());
@@ -966,15 +1261,27 @@ struct Builder {
             const Node &vn = t.need("vertices", "an array of at least 4 [x, y, z] points");
             if (vn.kind != NK::Array || vn.arr.size() < 4)
                 fail_at(vn.loc, t.kp("vertices"), "expected an array of at least 4 [x, y, z] points, got " + render(vn));
+            if (vn.arr.size() > CD_MAX_HULL_VERTICES)
+                fail_at(vn.loc, t.kp("vertices"),
+                        "expected at most " + std::to_string(CD_MAX_HULL_VERTICES) + " [x, y, z] points, got " +
+                            std::to_string(vn.arr.size()) + " (the hull is built by brute force)");
+            hull_vertices += vn.arr.size();
+            if (hull_vertices > CD_MAX_TOTAL_HULL_VERTICES)
+                fail_at(vn.loc, t.kp("vertices"),
+                        "expected at most " + std::to_string(CD_MAX_TOTAL_HULL_VERTICES) +
+                            " vertices in all convex shapes together, got " + std::to_string(hull_vertices) +
+                            " with this one");
             for (size_t i = 0; i < vn.arr.size(); i++) {
                 double v[3];
                 vec_of(*vn.arr[i], idx(t.kp("vertices"), i), 3, v);
                 verts.insert(verts.end(), v, v + 3);
             }
+            hull_volume_check(verts, vn, t.kp("vertices"));
         }
         int id = cd_model_add_shape(m.get(), body, (cd_shape_type)type, pos, R, sz, verts.empty() ? nullptr : verts.data(),
                                     (int)(verts.size() / 3), &err);
         if (id < 0) builder_fail(node.loc, path);
+        s.shape_at.emplace(name, s.shapes.size());
         s.shapes.push_back({name, id});
     }
 
@@ -1046,7 +1353,8 @@ struct Builder {
         std::vector<double> tt, tv;
         double one = 1.0;
         actuator_law(node, revolute, {}, a, tt, tv, t);
-        a.name = m->body_name[body];
+        std::string aname = std::string(m->sys_name[m->body_sys[body]]) + "/" + m->body_name[body];
+        a.name = aname.c_str();
         a.ntrn = 1;
         a.trn_body = &body;
         a.trn_ratio = &one;
@@ -1099,7 +1407,7 @@ struct Builder {
     }
 
     /* a link's passive elements, stop law and prescribed motion */
-    void joint_props(const Tab &t, int id, bool rev, const double *lim, double q0)
+    void joint_props(const Tab &t, int id, bool rev, const double *lim)
     {
         cd_joint_props p = cd_joint_props_default();
         bool any = false;
@@ -1162,7 +1470,6 @@ struct Builder {
             }
             any = true;
         }
-        (void)q0;
         if (any && cd_model_set_joint(m.get(), id, &p, &err) != CD_OK) builder_fail(t.n->loc, t.path);
     }
 
@@ -1178,26 +1485,20 @@ struct Builder {
         if (name == s.name)
             fail_at(t.get("name")->val->loc, t.kp("name"),
                     "expected a link name different from its system's name '" + s.name + "' (the base body has that name)");
-        for (auto &b : s.bodies)
-            if (b.name == name)
-                fail_at(t.get("name")->val->loc, t.kp("name"),
-                        "expected a link name unique in system '" + s.name + "', got '" + name + "' twice");
+        if (s.body_at.count(name))
+            fail_at(t.get("name")->val->loc, t.kp("name"),
+                    "expected a link name unique in system '" + s.name + "', got '" + name + "' twice");
         cd_link_desc d = cd_link_desc_default();
         d.name = name.c_str();
         d.parent = s.bodies.back().id;  /* default: the previous link, or the base */
         if (Entry *e = t.get("parent")) {
             std::string pn = str_of(*e->val, t.kp("parent"));
-            std::vector<std::string> names;
-            int pid = -1;
-            for (auto &b : s.bodies) {
-                names.push_back(b.name);
-                if (b.name == pn) pid = b.id;
-            }
-            if (pid < 0)
+            auto it = s.body_at.find(pn);
+            if (it == s.body_at.end())
                 fail_at(e->val->loc, t.kp("parent"),
                         "expected 'base' or the name of an earlier link of system '" + s.name + "', got '" + pn + "'" +
-                            hint(pn, names));
-            d.parent = pid;
+                            hint(pn, s.body_names()));
+            d.parent = s.bodies[it->second].id;
         }
         std::string jt = "revolute";
         if (Entry *e = t.get("joint")) jt = choice_of(*e->val, t.kp("joint"), {"revolute", "prismatic"});
@@ -1242,11 +1543,222 @@ struct Builder {
         }
         int id = cd_model_add_link(m.get(), s.id, &d, &err);
         if (id < 0) builder_fail(node.loc, path);
-        s.bodies.push_back(BodyInfo{name, id, 0});
-        checkpoints(t, s.bodies.back());
+        s.add_body(name, id);
+        checkpoints(t, s, s.bodies.back());
         shapes(t, s, id);
         if (Entry *e = t.get("actuator")) actuator(*e->val, t.kp("actuator"), id, rev);
-        joint_props(t, id, rev, has_lim ? lim : nullptr, q0u);
+        joint_props(t, id, rev, has_lim ? lim : nullptr);
+    }
+
+    /* [gripper] of a mechanism type: generates the hand (a fixed palm box and
+     * fingers of capsule links with check points along them), its drive
+     * (actuators or clutched fingers) and the pairs of its check points with
+     * every target's shapes. docs/grippers.md. */
+    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def)
+    {
+        std::string name = "hand";
+        if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
+        if (find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
+        std::string preset = "two_opposed";
+        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120"});
+        int nf = preset == "two_opposed" ? 2 : 3;
+        /* palm */
+        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0};
+        if (Entry *e = t.get("palm")) {
+            std::string pp = t.kp("palm");
+            Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position"});
+            pt.vec("size", 3, psize, Range::Pos);
+            pmass = pt.num("mass", pmass, Range::Pos);
+            pt.vec("position", 3, ppos);
+        }
+        /* fingers */
+        std::vector<double> L, M;
+        {
+            const Node &ln = t.need("links", "an array of link lengths [m], base to tip");
+            if (ln.kind != NK::Array || ln.arr.empty() || ln.arr.size() > 16)
+                fail_at(ln.loc, t.kp("links"), "expected 1 to 16 link lengths [m], got " + render(ln));
+            for (size_t i = 0; i < ln.arr.size(); i++) L.push_back(num_of(*ln.arr[i], idx(t.kp("links"), i), Range::Pos));
+        }
+        if (Entry *e = t.get("masses")) {
+            if (e->val->kind != NK::Array || e->val->arr.size() != L.size())
+                fail_at(e->val->loc, t.kp("masses"), "expected " + std::to_string(L.size()) + " masses (one per link), got " + render(*e->val));
+            for (size_t i = 0; i < L.size(); i++) M.push_back(num_of(*e->val->arr[i], idx(t.kp("masses"), i), Range::Pos));
+        } else {
+            for (double l : L) M.push_back(0.6 * l); /* ~ an aluminium tube: 0.6 kg/m */
+        }
+        double rad = t.num("radius", 0.008, Range::Pos);
+        double spacing = t.num("spacing", 0.1, Range::Pos);
+        double cps = t.num("checkpoint_spacing", rad, Range::Pos);
+        double total = 0;
+        for (double l : L) total += l;
+        /* the hand system */
+        cd_system_desc sd = cd_system_desc_default();
+        sd.name = name.c_str();
+        sd.type = CD_BASE_FIXED;
+        sd.mass = pmass;
+        sd.inertia[0] = pmass * (psize[1] * psize[1] + psize[2] * psize[2]) / 12.0;
+        sd.inertia[4] = pmass * (psize[0] * psize[0] + psize[2] * psize[2]) / 12.0;
+        sd.inertia[8] = pmass * (psize[0] * psize[0] + psize[1] * psize[1]) / 12.0;
+        for (int k = 0; k < 3; k++) sd.pos[k] = ppos[k];
+        SysInfo S;
+        S.name = name;
+        S.loc = t.n->loc;
+        S.path = t.path;
+        S.id = cd_model_add_system(m.get(), &sd, &err);
+        if (S.id < 0) builder_fail(t.n->loc, t.path);
+        S.add_body("base", m->sys_body_adr[S.id]);
+        double half[3] = {psize[0] / 2, psize[1] / 2, psize[2] / 2}, z3[3] = {0, 0, 0};
+        int palm_shape = cd_model_add_shape(m.get(), S.bodies[0].id, CD_SHAPE_BOX, z3, nullptr, half, nullptr, 0, &err);
+        if (palm_shape < 0) builder_fail(t.n->loc, t.path);
+        S.shape_at.emplace("palm", S.shapes.size());
+        S.shapes.push_back({"palm", palm_shape});
+        /* palm-face check points, tops flush with the face y = +size_y/2 */
+        for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
+            double p[3] = {x, half[1] - rad, 0};
+            if (cd_model_add_checkpoint(m.get(), S.bodies[0].id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
+            S.bodies[0].ncp++;
+            S.ncp++;
+        }
+        std::vector<std::vector<int>> fingers(nf);
+        for (int f = 0; f < nf; f++) {
+            double phi = preset == "two_opposed" ? (f == 0 ? M_PI : 0.0) : M_PI / 2 + 2 * M_PI * f / 3.0;
+            double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {er[2] * 0 - 0 * 1, 0, er[0] * 1}; /* e_r x y */
+            ax[0] = -er[2];
+            ax[1] = 0;
+            ax[2] = er[0];
+            int parent = S.bodies[0].id;
+            for (size_t j = 0; j < L.size(); j++) {
+                cd_link_desc d = cd_link_desc_default();
+                std::string ln = "f" + std::to_string(f) + "_l" + std::to_string(j);
+                d.name = ln.c_str();
+                d.parent = parent;
+                if (j == 0) { d.pos[0] = er[0] * spacing / 2; d.pos[1] = half[1]; d.pos[2] = er[2] * spacing / 2; }
+                else d.pos[1] = L[j - 1];
+                cd_v3_copy(d.axis, ax);
+                d.mass = M[j];
+                d.com[1] = L[j] / 2;
+                double It = M[j] * (3 * rad * rad + L[j] * L[j]) / 12.0, Ia = M[j] * rad * rad / 2;
+                memset(d.inertia, 0, sizeof d.inertia);
+                d.inertia[0] = It; d.inertia[4] = Ia; d.inertia[8] = It;
+                int id = cd_model_add_link(m.get(), S.id, &d, &err);
+                if (id < 0) builder_fail(t.n->loc, t.path);
+                S.add_body(ln, id);
+                double R[9], spos[3] = {0, L[j] / 2, 0}, ssz[3] = {rad, L[j] / 2, 0};
+                cd_m3_from_rpy(R, -M_PI / 2, 0, 0);
+                int sh = cd_model_add_shape(m.get(), id, CD_SHAPE_CAPSULE, spos, R, ssz, nullptr, 0, &err);
+                if (sh < 0) builder_fail(t.n->loc, t.path);
+                S.shape_at.emplace(ln, S.shapes.size());
+                S.shapes.push_back({ln, sh});
+                for (double y = cps; y <= L[j] + 1e-12; y += cps) {
+                    double p[3] = {0, y, 0};
+                    if (cd_model_add_checkpoint(m.get(), id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
+                    S.bodies.back().ncp++;
+                    S.ncp++;
+                }
+                fingers[f].push_back(id);
+                parent = id;
+            }
+        }
+        sys_at.emplace(S.name, sys.size());
+        sys.push_back(S);
+        /* the drive */
+        double T = t.num("torque", 0.2, Range::Any), open_at = t.num("open_at", 0.0, Range::NonNeg);
+        double ctime = 1.0, cangle = 120.0 * DEG, cstart = 0.0;
+        if (Entry *e = t.get("close")) {
+            std::string cp = t.kp("close");
+            Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start"});
+            ctime = ct.num("time", ctime, Range::Pos);
+            cangle = ct.num("angle_deg", 120.0, Range::Pos) * DEG;
+            cstart = ct.num("start", 0.0, Range::NonNeg);
+        }
+        if (open_at > 0 && open_at <= cstart + ctime)
+            fail_at(t.get("open_at")->val->loc, t.kp("open_at"), "expected open_at after the closing ends (" + fmt_num(cstart + ctime) + " s)");
+        std::vector<double> ratio;
+        size_t n = L.size();
+        if (Entry *e = t.get("ratios")) {
+            if (e->val->kind != NK::Array || e->val->arr.size() != n)
+                fail_at(e->val->loc, t.kp("ratios"), "expected " + std::to_string(n) + " ratios (base to tip), got " + render(*e->val));
+            for (size_t i = 0; i < n; i++) ratio.push_back(num_of(*e->val->arr[i], idx(t.kp("ratios"), i), Range::Pos));
+        } else {
+            for (size_t j = 0; j < n; j++) ratio.push_back((double)((n - j) * (n - j))); /* quadratic, tip 1 */
+        }
+        double Ts = 0, w0 = 0;
+        if (Entry *e = t.get("motor")) {
+            std::string mp = t.kp("motor");
+            Tab mt(table_of(*e->val, mp), mp, {"stall_torque", "noload_speed"});
+            Ts = mt.need_num("stall_torque", Range::Pos);
+            w0 = mt.need_num("noload_speed", Range::Pos);
+        }
+        if (ty == "soft" || ty == "tako") {
+            if (t.get("clutch")) fail_at(t.get("clutch")->kloc, t.kp("clutch"), "applies to 'space' and 'torque_switch' grippers only");
+            std::vector<double> st = {cstart}, sv = {T};
+            if (open_at > 0) { st.push_back(open_at); sv.push_back(-T); }
+            std::vector<int> jb;
+            std::vector<double> jr;
+            for (int f = 0; f < nf; f++) {
+                if (ty == "soft") { jb.clear(); jr.clear(); }
+                for (size_t j = 0; j < n; j++) { jb.push_back(fingers[f][j]); jr.push_back(ratio[j]); }
+                if (ty == "soft" || f == nf - 1) {
+                    cd_actuator_desc a = cd_actuator_desc_default();
+                    std::string an = name + (ty == "soft" ? "/f" + std::to_string(f) + "_motor" : "/motor");
+                    a.name = an.c_str();
+                    a.type = CD_ACT_STEPS;
+                    a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
+                    if (cstart > 0) { /* no torque before the closing starts */
+                        st.insert(st.begin(), 0.0); sv.insert(sv.begin(), 0.0);
+                        a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
+                    }
+                    a.ntrn = (int)jb.size(); a.trn_body = jb.data(); a.trn_ratio = jr.data();
+                    a.stall_torque = Ts; a.noload_speed = w0;
+                    if (cd_model_add_actuator(m.get(), &a, &err) < 0) builder_fail(t.n->loc, t.path);
+                    if (cstart > 0) { st.erase(st.begin()); sv.erase(sv.begin()); }
+                }
+            }
+        } else {
+            double thr = 0.05, Kw = 20.0, Dw = -1, lim = 0;
+            if (Entry *e = t.get("clutch")) {
+                std::string cp = t.kp("clutch");
+                Tab ct(table_of(*e->val, cp), cp, {"threshold", "wire_stiffness", "wire_damping", "torque_limit"});
+                thr = ct.num("threshold", thr, Range::Pos);
+                Kw = ct.num("wire_stiffness", Kw, Range::Pos);
+                Dw = ct.num("wire_damping", -1, Range::NonNeg);
+                lim = ct.num("torque_limit", 0.0, Range::NonNeg);
+            }
+            if (Ts > 0 && lim == 0) lim = Ts; /* the motor's stall torque limits the coupling */
+            std::vector<double> st = {0.0}, sq = {0.0};
+            if (cstart > 0) { st.push_back(cstart); sq.push_back(0.0); }
+            st.push_back(cstart + ctime); sq.push_back(cangle);
+            if (open_at > 0) { st.push_back(open_at); sq.push_back(cangle); st.push_back(open_at + ctime); sq.push_back(0.0); }
+            for (int f = 0; f < nf; f++) {
+                cd_finger_desc fd = cd_finger_desc_default();
+                std::string fname = name + "/f" + std::to_string(f);
+                /* the default wire damping: critical for the finger's links about the base joint */
+                double I = 0, arm = 0;
+                for (size_t j = 0; j < n; j++) { I += M[j] * (arm + L[j] / 2) * (arm + L[j] / 2); arm += L[j]; }
+                fd.name = fname.c_str();
+                fd.type = ty == "space" ? CD_FINGER_SPACE : CD_FINGER_TORQUE_SWITCH;
+                fd.njoint = (int)n;
+                fd.joint_body = fingers[f].data();
+                fd.ratio = ratio.data();
+                fd.wire_K = Kw;
+                fd.wire_D = Dw >= 0 ? Dw : 2.0 * sqrt(Kw * I);
+                fd.threshold = thr;
+                fd.grasp_torque = T;
+                fd.torque_limit = lim;
+                fd.sched_t = st.data(); fd.sched_q = sq.data(); fd.nsched = (int)st.size();
+                fd.open_at = open_at;
+                if (cd_model_add_finger(m.get(), &fd, &err) < 0) builder_fail(t.n->loc, t.path);
+            }
+        }
+        /* pairs: the hand's check points against every target shape */
+        int lid = cd_model_add_law(m.get(), &def.law, &err);
+        if (lid < 0) builder_fail(t.n->loc, t.path);
+        for (auto &s2 : sys) {
+            if (!s2.is_target) continue;
+            for (auto &sh : s2.shapes)
+                if (cd_model_add_pair(m.get(), S.id, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+        }
+        (void)total;
     }
 
     /* [[system]] (is_target = false) or the [[target]] sugar */
@@ -1261,6 +1773,7 @@ struct Builder {
         }
         Tab t(&node, path, keys);
         SysInfo s;
+        s.is_target = is_target;
         s.name = name_of_node(t.need("name", "a name"), t.kp("name"));
         s.loc = node.loc;
         s.path = path;
@@ -1307,10 +1820,11 @@ struct Builder {
             if (bool_of(*e->val, t.kp("prescribed_motion")) && cd_model_prescribe_base(m.get(), s.id, d.vel, d.angvel, &err) != CD_OK)
                 builder_fail(e->val->loc, t.kp("prescribed_motion"));
         }
-        s.bodies.push_back(BodyInfo{"base", m->sys_body_adr[s.id], 0});
+        s.add_body("base", m->sys_body_adr[s.id]);
+        sys_at.emplace(s.name, sys.size());
         sys.push_back(s);
         SysInfo &S = sys.back();
-        checkpoints(t, S.bodies[0]);
+        checkpoints(t, S, S.bodies[0]);
         if (is_target) {
             Entry *e = t.get("shape");
             if (!e) t.need("shape", "a table {type = ..., sizes}");
@@ -1385,18 +1899,17 @@ struct Builder {
         int body = -1, ncp = 0;
         if (cs.find('/') != std::string::npos) {
             std::string bn = cs.substr(cs.find('/') + 1);
-            std::vector<std::string> names;
-            for (auto &b : cps->bodies) {
-                names.push_back(b.name);
-                if (b.name == bn) { body = b.id; ncp = b.ncp; }
-            }
-            if (body < 0)
+            auto it = cps->body_at.find(bn);
+            if (it == cps->body_at.end())
                 fail_at(cn.loc, t.kp("checkpoints"),
-                        "expected \"system/link\", got '" + cs + "': system '" + sname + "' has no link '" + bn + "'" + hint(bn, names));
+                        "expected \"system/link\", got '" + cs + "': system '" + sname + "' has no link '" + bn + "'" +
+                            hint(bn, cps->body_names()));
+            body = cps->bodies[it->second].id;
+            ncp = cps->bodies[it->second].ncp;
             if (ncp == 0)
                 fail_at(cn.loc, t.kp("checkpoints"), "expected a body with check points, got '" + cs + "' which has none");
         } else {
-            for (auto &b : cps->bodies) ncp += b.ncp;
+            ncp = cps->ncp;
             if (ncp == 0)
                 fail_at(cn.loc, t.kp("checkpoints"), "expected a system with check points, got '" + cs + "' which has none");
         }
@@ -1408,22 +1921,20 @@ struct Builder {
         if (!shsys)
             fail_at(sn.loc, t.kp("shape"), "expected \"system/shape\", got '" + ss + "': no system '" + shs + "'" + hint(shs, sys_names()));
         int shape = -1;
-        std::vector<std::string> names;
-        for (auto &x : shsys->shapes) names.push_back(x.first);
         if (ss.find('/') != std::string::npos) {
             std::string nm = ss.substr(ss.find('/') + 1);
-            for (auto &x : shsys->shapes)
-                if (x.first == nm) shape = x.second;
+            auto it = shsys->shape_at.find(nm);
+            if (it != shsys->shape_at.end()) shape = shsys->shapes[it->second].second;
             if (shape < 0)
                 fail_at(sn.loc, t.kp("shape"),
                         "expected \"system/shape\", got '" + ss + "': system '" + shs + "' has no shape '" + nm + "'" +
-                            (names.empty() ? std::string(" (it has no shapes)") : hint(nm, names)));
+                            (shsys->shapes.empty() ? std::string(" (it has no shapes)") : hint(nm, shsys->shape_names())));
         } else {
             if (shsys->shapes.size() != 1)
                 fail_at(sn.loc, t.kp("shape"),
                         "expected \"system/shape\", got '" + ss + "': system '" + shs + "' has " +
                             std::to_string(shsys->shapes.size()) + " shapes, name one" +
-                            (names.empty() ? std::string() : " (" + list(names) + ")"));
+                            (shsys->shapes.empty() ? std::string() : " (" + list(shsys->shape_names()) + ")"));
             shape = shsys->shapes[0].second;
         }
         bool own = false;
@@ -1448,13 +1959,54 @@ struct Builder {
         std::string title;
         double duration = 0, output_dt = 0, flush_every = 1.0;
         int event_capacity = 4096;
+        int hand = -1, object = -1;
+        double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
+        double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
     };
+
+    /* The work of a run is bounded before it starts: max_rhs_evals and
+     * max_wall_time (0 = no limit) are enforced during the run (the CLI's
+     * step callback); here the least work the run can take (its steps are at
+     * most h_max, or exactly h_fixed, and end at every sample) must fit in
+     * max_rhs_evals, so that duration = 1e300 is refused by `check`. */
+    void work_budget(const Tab &t, Node &sn, Run &run)
+    {
+        const cd_options &o = m->opt;
+        run.max_wall_time = t.num("max_wall_time", run.max_wall_time, Range::NonNeg);
+        run.max_rhs_evals = t.num("max_rhs_evals", run.max_rhs_evals, Range::NonNeg);
+        if (Entry *e = t.get("max_rhs_evals")) int_of(*e->val, t.kp("max_rhs_evals"), 0);
+        /* right-hand-side evaluations per step, at least: the stages of the
+         * explicit steppers that are not reused; one for the implicit ones */
+        double per_step = 1;
+        const char *hname = "h_max";
+        double h = o.h_max;
+        switch (o.stepper) {
+        case CD_STEP_RKF45: case CD_STEP_RKCK: per_step = 5; break;
+        case CD_STEP_RK8PD: per_step = 12; break;
+        case CD_STEP_RK4_FIXED: per_step = 4; hname = "h_fixed"; h = o.h_fixed; break;
+        default: break;
+        }
+        double samples = std::ceil(run.duration / run.output_dt - 1e-9);
+        double steps = h > 0 ? std::max(samples, std::ceil(run.duration / h - 1e-9)) : samples;
+        run.min_steps = steps;
+        run.min_rhs_evals = steps * per_step;
+        if (run.max_rhs_evals > 0 && run.min_rhs_evals > run.max_rhs_evals) {
+            Entry *e = t.get("duration");
+            fail_at(e ? e->val->loc : sn.loc, t.kp("duration"),
+                    "expected a run within max_rhs_evals = " + fmt_num(run.max_rhs_evals) +
+                        " right-hand-side evaluations, got one needing at least " + fmt_num(run.min_rhs_evals) + " (" +
+                        fmt_num(steps) + " steps of at most " + hname + " = " + fmt_num(h) + " s, " + fmt_num(per_step) +
+                        " evaluations each, for duration = " + fmt_num(run.duration) +
+                        " s); shorten the duration or raise simulation.max_rhs_evals");
+        }
+    }
 
     void build(Node &root, Run &run, const std::string &path)
     {
         m.reset(cd_model_create());
         if (!m) throw std::bad_alloc();
-        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator"});
+        Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator",
+                            "capture"});
         if (Entry *e = top.get("include"))
             fail_at(e->kloc, "include", "expected 'include' only at the top of a file, got it from an override");
 
@@ -1471,7 +2023,7 @@ struct Builder {
             Tab t(&sn, "simulation",
                   {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
                    "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
-                   "equilibrium_start"});
+                   "equilibrium_start", "max_wall_time", "max_rhs_evals"});
             cd_options &o = m->opt;
             run.duration = t.need_num("duration", Range::Pos);
             t.vec("gravity", 3, m->gravity);
@@ -1508,6 +2060,7 @@ struct Builder {
                             fmt_num(run.output_dt));
             }
             run.flush_every = t.num("flush_every", 1.0, Range::Pos);
+            work_budget(t, sn, run);
             if (Entry *e = t.get("event_capacity")) {
                 long long v = int_of(*e->val, t.kp("event_capacity"), 1);
                 if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
@@ -1544,19 +2097,49 @@ struct Builder {
 
         /* [gripper] */
         if (Entry *e = top.get("gripper")) {
-            Tab t(table_of(*e->val, "gripper"), "gripper", {"type", "system"});
-            const Node &tn = t.need("type", "'torque'");
-            std::string ty = str_of(tn, t.kp("type"));
-            if (ty == "soft_gripper" || ty == "tako" || ty == "space_gripper")
-                fail_at(tn.loc, t.kp("type"), "expected 'torque', got '" + ty + "' (reserved for a later version of capdyn)");
-            choice_of(tn, t.kp("type"), {"torque"});
-            if (Entry *g = t.get("system")) {
-                std::string gs = str_of(*g->val, t.kp("system"));
-                if (!find_sys(gs))
-                    fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+            Tab t(table_of(*e->val, "gripper"), "gripper",
+                  {"type", "system", "name", "hand", "palm", "links", "masses", "radius", "spacing", "checkpoint_spacing",
+                   "close", "torque", "open_at", "ratios", "motor", "clutch"});
+            const Node &tn = t.need("type", "one of 'torque', 'soft', 'tako', 'space', 'torque_switch'");
+            std::string ty = choice_of(tn, t.kp("type"), {"torque", "soft", "tako", "space", "torque_switch"});
+            if (ty == "torque") {
+                for (auto &k : t.n->tab)
+                    if (k.key != "type" && k.key != "system")
+                        fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
+                if (Entry *g = t.get("system")) {
+                    std::string gs = str_of(*g->val, t.kp("system"));
+                    if (!find_sys(gs))
+                        fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+                    run.hand = find_sys(gs)->id;
+                }
+                /* type "torque": the joints are driven by their own `actuator` tables */
+            } else {
+                if (Entry *g = t.get("system"))
+                    fail_at(g->kloc, t.kp("system"), "does not apply to a '" + ty + "' gripper (it builds its own hand; name it with 'name')");
+                gripper_hand(t, ty, def);
+                run.hand = sys.back().id;
             }
-            /* type "torque": the joints are driven by their own `actuator` tables */
         }
+
+        /* [capture]: the verdict's object and thresholds (verdict.h) */
+        for (auto &s2 : sys)
+            if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
+        if (Entry *e = top.get("capture")) {
+            Tab t(table_of(*e->val, "capture"), "capture", {"object", "v_max", "w_max", "dwell", "workspace"});
+            if (Entry *o = t.get("object")) {
+                std::string on = str_of(*o->val, t.kp("object"));
+                SysInfo *os = find_sys(on);
+                if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
+                if (m->sys_base_type[os->id] != CD_BASE_FREE)
+                    fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
+                run.object = os->id;
+            }
+            run.v_max = t.num("v_max", run.v_max, Range::Pos);
+            run.w_max = t.num("w_max", run.w_max, Range::Pos);
+            run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
+            run.workspace = t.num("workspace", run.workspace, Range::Pos);
+        }
+        if (run.hand == run.object) run.object = -1;
 
         /* [[pair]] */
         if (Entry *e = top.get("pair")) {
@@ -1577,11 +2160,48 @@ char *cdup(const std::string &s)
     return r;
 }
 
+/* The message on one line with no terminal control: control characters
+ * (C0, DEL and C1 in UTF-8) that came from the input (keys, strings, file
+ * names) are written as \n, \t, \r, \\xNN or \\u00NN; other UTF-8 is kept. */
+std::string escape_controls(const std::string &m)
+{
+    std::string o;
+    o.reserve(m.size());
+    for (size_t i = 0; i < m.size(); i++) {
+        unsigned char c = (unsigned char)m[i];
+        char b[8];
+        if (c == '\n') o += "\\n";
+        else if (c == '\t') o += "\\t";
+        else if (c == '\r') o += "\\r";
+        else if (c < 0x20 || c == 0x7f) {
+            std::snprintf(b, sizeof b, "\\x%02x", c);
+            o += b;
+        } else if (c == 0xc2 && i + 1 < m.size() && (unsigned char)m[i + 1] >= 0x80 && (unsigned char)m[i + 1] <= 0x9f) {
+            std::snprintf(b, sizeof b, "\\u%04x", (unsigned char)m[i + 1]);
+            o += b;
+            i++;
+        } else {
+            o += (char)c;
+        }
+    }
+    return o;
+}
+
 void set_err(cd_error *err, cd_status st, const std::string &msg)
 {
     if (!err) return;
     err->status = st;
-    std::snprintf(err->msg, sizeof err->msg, "%s", msg.c_str());
+    std::string m = escape_controls(msg);
+    /* cut at a character boundary, never inside an escape or a UTF-8 sequence */
+    size_t cap = sizeof err->msg - 1;
+    if (m.size() > cap) {
+        size_t cut = cap - 3;
+        while (cut > 0 && ((unsigned char)m[cut] & 0xc0) == 0x80) cut--;
+        size_t bs = m.rfind('\\', cut);
+        if (bs != std::string::npos && cut - bs < 6) cut = bs;
+        m = m.substr(0, cut) + "...";
+    }
+    std::snprintf(err->msg, sizeof err->msg, "%s", m.c_str());
 }
 
 void free_scenario(cd_scenario *sc)
@@ -1628,6 +2248,16 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->output_dt = run.output_dt;
     sc->flush_every = run.flush_every;
     sc->event_capacity = run.event_capacity;
+    sc->capture_hand = run.hand;
+    sc->capture_object = run.object;
+    sc->capture_v_max = run.v_max;
+    sc->capture_w_max = run.w_max;
+    sc->capture_dwell = run.dwell;
+    sc->capture_workspace = run.workspace;
+    sc->max_wall_time = run.max_wall_time;
+    sc->max_rhs_evals = run.max_rhs_evals;
+    sc->min_steps = run.min_steps;
+    sc->min_rhs_evals = run.min_rhs_evals;
     return sc;
 }
 

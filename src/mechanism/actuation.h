@@ -22,4 +22,10 @@ int cd_limit_transition(const cd_model *m, cd_data *d, int i, cd_event *ev);
 void cd_fric_functions(const cd_model *m, const cd_data *d, int i, int forgive, double g[2]);
 int cd_fric_transition(const cd_model *m, cd_data *d, int i, cd_event *ev);
 
+/* Clutched fingers (gripper.c): coupling or equal-pressure torques added to
+ * qfrc_actuator; their switch provider. */
+void cd_gripper_torques(const cd_model *m, cd_data *d);
+void cd_finger_functions(const cd_model *m, const cd_data *d, int i, double g[2]);
+int cd_finger_transition(const cd_model *m, cd_data *d, int i, cd_event *ev);
+
 #endif

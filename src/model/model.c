@@ -3,6 +3,7 @@
 #include "capdyn/model.h"
 #include "../math/cd_math.h"
 
+#include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -194,6 +195,9 @@ void cd_model_free(cd_model *m)
     free(m->act_name); free(m->act_type); free(m->act_prm); free(m->act_motor); free(m->act_tbl_adr);
     free(m->act_tbl_n); free(m->act_trn_adr); free(m->act_trn_n); free(m->trn_body); free(m->trn_ratio);
     free(m->body_act); free(m->tbl_t); free(m->tbl_v); free(m->breaks);
+    for (i = 0; i < m->nfinger; i++) free(m->finger_name[i]);
+    free(m->finger_name); free(m->finger_type); free(m->finger_jnt_adr); free(m->finger_jnt_n); free(m->fjnt_body);
+    free(m->fjnt_sync); free(m->fjnt_ratio); free(m->finger_prm); free(m->finger_tbl_adr); free(m->finger_tbl_n);
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert);
@@ -373,7 +377,12 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
     m->nsys++;
     cd_m3_identity(R);
     b = new_body(m, s->name, id, -1, CD_JOINT_BASE, z3, R, ax, s->mass, z3, s->inertia, 0.0, 0.0);
-    if (b < 0) { m->nsys--; seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    if (b < 0) { /* undo: the name is not freed by cd_model_free beyond nsys */
+        m->nsys--;
+        free(m->sys_name[id]);
+        seterr(err, CD_ENOMEM, "out of memory");
+        return -1;
+    }
     return id;
 }
 
@@ -734,6 +743,78 @@ cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_
     return CD_OK;
 }
 
+cd_finger_desc cd_finger_desc_default(void)
+{
+    cd_finger_desc f;
+    memset(&f, 0, sizeof f);
+    f.type = CD_FINGER_SPACE;
+    return f;
+}
+
+int cd_model_add_finger(cd_model *m, const cd_finger_desc *f, cd_error *err)
+{
+    int id, n, i, j, ok = 0, bad;
+    const char *nm;
+    FROZEN_CHECK(-1);
+    if (!f) { seterr(err, CD_EINVAL, "finger: description is NULL"); return -1; }
+    nm = f->name ? f->name : "";
+    if (f->type < 0 || f->type >= CD_FINGER_NTYPES) { seterr(err, CD_EINVAL, "finger '%s': unknown type", nm); return -1; }
+    if (f->njoint < 1 || !f->joint_body) { seterr(err, CD_EINVAL, "finger '%s': needs at least one joint", nm); return -1; }
+    for (i = 0; i < f->njoint; i++) {
+        if (!is_joint(m, f->joint_body[i])) {
+            seterr(err, CD_EINVAL, "finger '%s': joint %d (body %d) is not a joint body", nm, i, f->joint_body[i]);
+            return -1;
+        }
+        for (j = 0; j < i; j++)
+            if (f->joint_body[j] == f->joint_body[i]) { seterr(err, CD_EINVAL, "finger '%s': a joint appears twice", nm); return -1; }
+        if ((f->sync && !isfinite(f->sync[i])) || (f->ratio && !isfinite(f->ratio[i]))) {
+            seterr(err, CD_EINVAL, "finger '%s': non-finite sync gain or ratio", nm);
+            return -1;
+        }
+    }
+    if (!(f->wire_K > 0) || !isfinite(f->wire_K) || !(f->wire_D >= 0) || !isfinite(f->wire_D) || !(f->threshold > 0) ||
+        !isfinite(f->threshold) || !isfinite(f->grasp_torque) || !(f->torque_limit >= 0) || !isfinite(f->torque_limit) ||
+        !(f->open_at >= 0) || !isfinite(f->open_at)) {
+        seterr(err, CD_EINVAL, "finger '%s': needs wire_K > 0, wire_D >= 0, threshold > 0, torque_limit >= 0, open_at >= 0, all finite", nm);
+        return -1;
+    }
+    if (!f->sched_t || !f->sched_q || f->nsched < 1) { seterr(err, CD_EINVAL, "finger '%s': needs a closing schedule", nm); return -1; }
+    if ((bad = rows_ok(f->sched_t, f->sched_q, f->nsched)) >= 0) {
+        seterr(err, CD_EINVAL, "finger '%s': schedule row %d: times must be finite and strictly increasing", nm, bad);
+        return -1;
+    }
+    id = m->nfinger;
+    n = id + 1;
+    ok |= RS(m->finger_name, n); ok |= RS(m->finger_type, n); ok |= RS(m->finger_jnt_adr, n); ok |= RS(m->finger_jnt_n, n);
+    ok |= RS(m->finger_prm, 6 * n); ok |= RS(m->finger_tbl_adr, n); ok |= RS(m->finger_tbl_n, n);
+    ok |= RS(m->fjnt_body, m->nfjnt + f->njoint); ok |= RS(m->fjnt_sync, m->nfjnt + f->njoint);
+    ok |= RS(m->fjnt_ratio, m->nfjnt + f->njoint);
+    if (ok) { seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_name[id] = dupstr(f->name);
+    if (!m->finger_name[id]) { seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_tbl_adr[id] = add_rows(m, f->sched_t, f->sched_q, f->nsched);
+    if (m->finger_tbl_adr[id] < 0) { free(m->finger_name[id]); seterr(err, CD_ENOMEM, "out of memory"); return -1; }
+    m->finger_tbl_n[id] = f->nsched;
+    m->finger_type[id] = f->type;
+    m->finger_jnt_adr[id] = m->nfjnt;
+    m->finger_jnt_n[id] = f->njoint;
+    for (i = 0; i < f->njoint; i++) {
+        double r = (double)(f->njoint - i);
+        m->fjnt_body[m->nfjnt + i] = f->joint_body[i];
+        m->fjnt_sync[m->nfjnt + i] = f->sync ? f->sync[i] : 1.0;
+        m->fjnt_ratio[m->nfjnt + i] = f->ratio ? f->ratio[i] : r * r; /* quadratic from the tip (1) to the base (n^2) */
+    }
+    m->nfjnt += f->njoint;
+    m->finger_prm[6 * id] = f->wire_K;
+    m->finger_prm[6 * id + 1] = f->wire_D;
+    m->finger_prm[6 * id + 2] = f->threshold;
+    m->finger_prm[6 * id + 3] = f->grasp_torque;
+    m->finger_prm[6 * id + 4] = f->torque_limit;
+    m->finger_prm[6 * id + 5] = f->open_at;
+    m->nfinger++;
+    return id;
+}
+
 cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_error *err)
 {
     const char *nm;
@@ -846,7 +927,7 @@ static double subtree_axis_inertia(const cd_model *m, int b)
     double *R = NULL, *x = NULL, I = 0, ax[3];
     R = malloc((size_t)(end - b) * 9 * sizeof(double));
     x = malloc((size_t)(end - b) * 3 * sizeof(double));
-    if (!R || !x) { free(R); free(x); return 0; }
+    if (!R || !x) { free(R); free(x); return -1.0; } /* out of memory: finalize reports it */
     /* frames relative to b's joint frame at q = q0 */
     cd_m3_identity(R);
     cd_v3_zero(x);
@@ -899,6 +980,7 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
         if (m->body_parent[b] < 0) continue;
         if (m->body_lim_id[b] >= 0) {
             double *L = m->body_limit + 6 * b, Ia = subtree_axis_inertia(m, b);
+            if (Ia < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
             if (m->body_q0[b] < L[0] || m->body_q0[b] > L[1]) {
                 seterr(err, CD_EINVAL, "joint '%s': initial position %g is outside its limits [%g, %g]", m->body_name[b],
                        m->body_q0[b], L[0], L[1]);
@@ -913,7 +995,11 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
         if (m->body_fric[3 * b] > 0) {
             double *F = m->body_fric + 3 * b;
             if (F[1] == 0) F[1] = F[0] / 1e-4;
-            if (F[2] == 0) F[2] = 2.0 * sqrt(F[1] * subtree_axis_inertia(m, b));
+            if (F[2] == 0) {
+                double Ia = subtree_axis_inertia(m, b);
+                if (Ia < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+                F[2] = 2.0 * sqrt(F[1] * Ia);
+            }
             m->body_fric_id[b] = nf++;
         } else {
             m->body_fric_id[b] = -1;
@@ -933,6 +1019,8 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
     }
     for (a = 0; a < m->nu; a++)
         for (i = 0; i < m->act_tbl_n[a]; i++) m->breaks[nb++] = m->tbl_t[m->act_tbl_adr[a] + i];
+    for (a = 0; a < m->nfinger; a++)
+        for (i = 0; i < m->finger_tbl_n[a]; i++) m->breaks[nb++] = m->tbl_t[m->finger_tbl_adr[a] + i];
     qsort(m->breaks, (size_t)nb, sizeof(double), cmp_double);
     for (i = 0, a = 0; i < nb; i++)
         if (a == 0 || m->breaks[i] != m->breaks[a - 1]) m->breaks[a++] = m->breaks[i];
@@ -1040,6 +1128,129 @@ static int slot_wanted(const cd_model *m, int i, int k)
     return 1;
 }
 
+/* ---- contact slots: every check point of a pair's system/body x the pair's
+ * shape (slot_wanted), one slot per (check point, shape), the first pair's
+ * law kept, in pair order then check-point order.
+ * Design: a pair whose (system or body, shape) is covered by an earlier pair
+ * adds nothing and is skipped (found by sorting the pairs); the others visit
+ * only their own check points (bucketed by system and by body); the rare
+ * remaining duplicates (a body pair, then a whole-system pair on the same
+ * shape) are found by sorting the candidates on (shape, check point, order).
+ * O((P + C) log(P + C)) for P pairs and C candidate slots, where the former
+ * scan was O(P x ncp) and the duplicate test O(slots^2). ---- */
+/* at most 10^7 slots (a slot costs about 300 bytes of cd_data and 3 states) */
+#define CD_MAX_SLOTS 10000000u
+typedef struct { int a, b, c, i; } slot_key;
+static int slot_key_cmp(const void *x, const void *y)
+{
+    const slot_key *p = (const slot_key *)x, *q = (const slot_key *)y;
+    if (p->a != q->a) return p->a < q->a ? -1 : 1;
+    if (p->b != q->b) return p->b < q->b ? -1 : 1;
+    if (p->c != q->c) return p->c < q->c ? -1 : 1;
+    return p->i < q->i ? -1 : (p->i > q->i);
+}
+
+/* ncp ids grouped by owner (body or system), ascending within a group */
+static int bucket_cps(const cd_model *m, int by_sys, int nown, int **adr, int **ids)
+{
+    int k, o, *cnt;
+    *adr = calloc((size_t)nown + 1, sizeof(int));
+    *ids = malloc((size_t)(m->ncp ? m->ncp : 1) * sizeof(int));
+    cnt = calloc((size_t)nown + 1, sizeof(int));
+    if (!*adr || !*ids || !cnt) { free(cnt); return -1; }
+    for (k = 0; k < m->ncp; k++) (*adr)[1 + (by_sys ? m->body_sys[m->cp_body[k]] : m->cp_body[k])]++;
+    for (o = 0; o < nown; o++) (*adr)[o + 1] += (*adr)[o];
+    for (k = 0; k < m->ncp; k++) {
+        o = by_sys ? m->body_sys[m->cp_body[k]] : m->cp_body[k];
+        (*ids)[(*adr)[o] + cnt[o]++] = k;
+    }
+    free(cnt);
+    return 0;
+}
+
+static cd_status build_slots(cd_model *m, int ny, cd_error *err)
+{
+    cd_status st = CD_ENOMEM;
+    int i, k, j, *skip = NULL, *body_adr = NULL, *body_cp = NULL, *sys_adr = NULL, *sys_cp = NULL;
+    slot_key *pk = NULL, *ck = NULL;
+    size_t nc = 0, cap = 0, n, limit = (size_t)(INT_MAX - ny) / 3;
+    if (limit > CD_MAX_SLOTS) limit = CD_MAX_SLOTS;
+    free(m->slot_cp); free(m->slot_shape); free(m->slot_law); /* a failed earlier finalize */
+    m->slot_cp = m->slot_shape = m->slot_law = NULL;
+    m->nslot = 0;
+    skip = calloc((size_t)(m->npair ? m->npair : 1), sizeof(int));
+    pk = malloc((size_t)(m->npair ? m->npair : 1) * sizeof *pk);
+    if (!skip || !pk || bucket_cps(m, 0, m->nbody, &body_adr, &body_cp) || bucket_cps(m, 1, m->nsys, &sys_adr, &sys_cp))
+        goto out;
+    /* pairs covered by an earlier one: same (shape, system) and the same body
+     * or an earlier whole-system pair (body -1 sorts first in its group) */
+    for (i = 0; i < m->npair; i++) {
+        pk[i].a = m->pair_shape[i]; pk[i].b = m->pair_sys[i]; pk[i].c = m->pair_body[i]; pk[i].i = i;
+    }
+    if (m->npair) qsort(pk, (size_t)m->npair, sizeof *pk, slot_key_cmp);
+    for (i = 0; i < m->npair; i++) {
+        int g = i, whole = -1;
+        if (i > 0 && pk[i].a == pk[i - 1].a && pk[i].b == pk[i - 1].b) continue;
+        while (g < m->npair && pk[g].a == pk[i].a && pk[g].b == pk[i].b) g++; /* group [i, g) */
+        if (pk[i].c < 0) whole = pk[i].i;
+        for (j = i; j < g; j++) {
+            if (whole >= 0 && pk[j].i > whole) skip[pk[j].i] = 1;
+            else if (j > i && pk[j].c == pk[j - 1].c) skip[pk[j].i] = 1;
+        }
+    }
+    /* candidates in pair order, then check-point order */
+    for (n = 0, i = 0; i < m->npair; i++) {
+        const int *ids;
+        int cnt;
+        if (skip[i]) continue;
+        if (m->pair_body[i] >= 0) { ids = body_cp + body_adr[m->pair_body[i]]; cnt = body_adr[m->pair_body[i] + 1] - body_adr[m->pair_body[i]]; }
+        else { ids = sys_cp + sys_adr[m->pair_sys[i]]; cnt = sys_adr[m->pair_sys[i] + 1] - sys_adr[m->pair_sys[i]]; }
+        for (j = 0; j < cnt; j++) {
+            k = ids[j];
+            if (!slot_wanted(m, i, k)) continue;
+            if (nc == cap) {
+                slot_key *q;
+                cap = cap ? 2 * cap : 1024;
+                q = realloc(ck, cap * sizeof *ck);
+                if (!q) goto out;
+                ck = q;
+            }
+            ck[nc].a = m->pair_shape[i]; ck[nc].b = k; ck[nc].c = (int)n; ck[nc].i = i;
+            nc++;
+            n++;
+            if (nc > 2 * limit + 2) break; /* far too many already */
+        }
+        if (nc > 2 * limit + 2) break;
+    }
+    /* keep the first of each (shape, check point), then restore the order */
+    if (nc) qsort(ck, nc, sizeof *ck, slot_key_cmp);
+    for (n = 0, j = 0; (size_t)j < nc; j++)
+        if (j == 0 || ck[j].a != ck[j - 1].a || ck[j].b != ck[j - 1].b) ck[n++] = ck[j];
+    if (n > limit) {
+        seterr(err, CD_EINVAL, "too many contact slots: %lu (check points x shapes of the pairs), at most %lu",
+               (unsigned long)n, (unsigned long)limit);
+        st = CD_EINVAL;
+        goto out;
+    }
+    for (j = 0; (size_t)j < n; j++) { k = ck[j].a; ck[j].a = ck[j].c; ck[j].c = k; } /* order first */
+    if (n) qsort(ck, n, sizeof *ck, slot_key_cmp);
+    m->slot_cp = malloc((n ? n : 1) * sizeof(int));
+    m->slot_shape = malloc((n ? n : 1) * sizeof(int));
+    m->slot_law = malloc((n ? n : 1) * sizeof(int));
+    if (!m->slot_cp || !m->slot_shape || !m->slot_law) goto out;
+    for (j = 0; (size_t)j < n; j++) {
+        m->slot_cp[j] = ck[j].b;
+        m->slot_shape[j] = ck[j].c;
+        m->slot_law[j] = m->pair_law[ck[j].i];
+    }
+    m->nslot = (int)n;
+    st = CD_OK;
+out:
+    if (st == CD_ENOMEM) seterr(err, CD_ENOMEM, "out of memory");
+    free(skip); free(pk); free(ck); free(body_adr); free(body_cp); free(sys_adr); free(sys_cp);
+    return st;
+}
+
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
     int s, b, i, k, nslot = 0, ny = 0, nv = 0;
@@ -1062,32 +1273,16 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     }
     /* slots: every check point of a pair's system/body x the pair's shape,
      * except, inside one system, check points on the shape's own body and on
-     * the bodies jointed to it (they touch at the joint by construction) */
-    for (i = 0; i < m->npair; i++)
-        for (k = 0; k < m->ncp; k++)
-            if (slot_wanted(m, i, k)) nslot++;
-    free(m->slot_cp); free(m->slot_shape); free(m->slot_law);      /* a failed earlier finalize */
+     * the bodies jointed to it (they touch at the joint by construction);
+     * later pairs do not duplicate a slot (build_slots) */
     free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
     m->shape_face_adr = m->shape_face_num = m->face_vert = NULL;
     m->face_plane = NULL;
-    m->slot_cp = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
-    m->slot_shape = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
-    m->slot_law = malloc((size_t)(nslot ? nslot : 1) * sizeof(int));
-    if (!m->slot_cp || !m->slot_shape || !m->slot_law) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
-    nslot = 0;
-    for (i = 0; i < m->npair; i++)
-        for (k = 0; k < m->ncp; k++)
-            if (slot_wanted(m, i, k)) {
-                int j, dup = 0;
-                for (j = 0; j < nslot; j++)
-                    if (m->slot_cp[j] == k && m->slot_shape[j] == m->pair_shape[i]) dup = 1;
-                if (dup) continue; /* later pairs do not duplicate a slot */
-                m->slot_cp[nslot] = k;
-                m->slot_shape[nslot] = m->pair_shape[i];
-                m->slot_law[nslot] = m->pair_law[i];
-                nslot++;
-            }
-    m->nslot = nslot;
+    {
+        cd_status sst = build_slots(m, ny, err);
+        if (sst != CD_OK) return sst;
+    }
+    nslot = m->nslot;
     /* hull faces of the convex shapes */
     m->shape_face_adr = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));
     m->shape_face_num = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));
@@ -1117,7 +1312,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     m->ny_slot_adr = ny;
     m->ny_fric_adr = ny + 3 * nslot;
     m->ny = m->ny_fric_adr + m->nfric;
-    m->nsw = nslot + m->nlim + m->nfric + m->nuser;
+    m->nsw = nslot + m->nlim + m->nfric + m->nfinger + m->nuser;
     m->finalized = 1;
     return CD_OK;
 }

@@ -3,8 +3,11 @@
  *
  * Model: a quasi-static settle. From the pose the scenario gives, with the
  * contacts closed and unloaded, every degree of freedom that some closed
- * contact or stop holds (a non-zero column of the stiffness below) moves by
- * a small delta; sticking contacts and joint frictions move with it, so their
+ * contact or stop holds moves by
+ * a small delta (a DoF takes part when its column of the Jacobian below
+ * changes if every closed contact, stop and friction is let go: a spring, an
+ * actuator or gravity alone does not make it take part); sticking contacts
+ * and joint frictions move with it, so their
  * anchors take the relative tangential displacement of the two material
  * points (joint friction: the joint's displacement), and the normal
  * penetrations change with the pose. delta solves
@@ -87,22 +90,56 @@ static cd_status residual(const cd_model *m, cd_data *d, const eq_ctx *c, const 
     return CD_OK;
 }
 
+/* The Jacobian (into Jf) with every closed slot and stop let go and every
+ * joint friction slipping without torque: what holds nothing. The modes are
+ * kept in save (nslot + nlim + 2 nfric words) and restored. r: 2 n scratch. */
+static cd_status free_jacobian(const cd_model *m, cd_data *d, const eq_ctx *c, double *delta, double *r,
+                               double *Jf, double h, double *save)
+{
+    int n = c->n, i, j, k;
+    cd_status st;
+    double *r0 = r + n;
+    for (k = 0; k < m->nslot; k++) { save[k] = d->slot_mode[k]; d->slot_mode[k] = CD_MODE_OPEN; }
+    for (k = 0; k < m->nlim; k++) { save[m->nslot + k] = d->lim_mode[k]; d->lim_mode[k] = CD_LIM_FREE; }
+    for (k = 0; k < m->nfric; k++) {
+        save[m->nslot + m->nlim + 2 * k] = d->fric_mode[k];
+        save[m->nslot + m->nlim + 2 * k + 1] = d->fric_dir[k];
+        d->fric_mode[k] = CD_MODE_SLIP;
+        d->fric_dir[k] = 0.0;
+    }
+    st = residual(m, d, c, delta, r0);
+    for (j = 0; j < n && st == CD_OK; j++) {
+        delta[j] += h;
+        st = residual(m, d, c, delta, r);
+        delta[j] -= h;
+        for (i = 0; i < n; i++) Jf[i * n + j] = (r[i] - r0[i]) / h;
+    }
+    for (k = 0; k < m->nslot; k++) d->slot_mode[k] = (int)save[k];
+    for (k = 0; k < m->nlim; k++) d->lim_mode[k] = (int)save[m->nslot + k];
+    for (k = 0; k < m->nfric; k++) {
+        d->fric_mode[k] = (int)save[m->nslot + m->nlim + 2 * k];
+        d->fric_dir[k] = save[m->nslot + m->nlim + 2 * k + 1];
+    }
+    return st;
+}
+
 cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
 {
     const double fd_h = 1e-8;     /* [m | rad] finite-difference step: load/stiffness is ~1e-9..1e-4 */
     const int max_it = 30;
     int n = m->nv, i, j, it, np = 0;
-    size_t words = (size_t)(6 * n * n + 8 * n + m->ny + 9 * m->nslot + 16);
+    size_t words = (size_t)(6 * n * n + 10 * n + m->ny + 10 * m->nslot + m->nlim + 2 * m->nfric + 16);
     double *w = d->allocator.alloc(words * sizeof(double), d->allocator.ctx);
-    double *J, *V, *S, *work, *r, *r1, *delta, *dx, scale, res = HUGE_VAL;
+    double *J, *V, *S, *work, *r, *r1, *delta, *dx, *save, scale, res = HUGE_VAL;
     int *part, have_msg = 0;
     eq_ctx c;
     cd_status st = CD_OK;
     if (!w) { cd_error_set(err, CD_ENOMEM, "out of memory for the equilibrium start"); return CD_ENOMEM; }
     memset(w, 0, words * sizeof(double));
-    J = w; V = J + n * n; S = V + n * n; work = S + n; r = work + n; r1 = r + n; delta = r1 + n; dx = delta + n;
+    J = w; V = J + n * n; S = V + n * n; work = S + n; r = work + n; r1 = r + n; delta = r1 + 2 * n; dx = delta + n;
     c.y0 = dx + n; c.cloc = c.y0 + m->ny; c.n0 = c.cloc + 6 * m->nslot;
-    part = (int *)(void *)(c.n0 + 3 * m->nslot + 1);   /* n ints in the 4 n n words left */
+    save = c.n0 + 3 * m->nslot;                        /* nslot + nlim + 2 nfric */
+    part = (int *)(void *)(save + m->nslot + m->nlim + 2 * m->nfric + 1);   /* n ints in the 4 n n words left */
     c.n = n;
     memcpy(c.y0, d->y, (size_t)m->ny * sizeof(double));
     /* contact points in each body's frame at the given pose */
@@ -133,13 +170,21 @@ cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
             delta[j] -= fd_h;
             for (i = 0; i < n; i++) J[i * n + j] = (r1[i] - r[i]) / fd_h;
         }
-        if (it == 0) { /* the degrees of freedom something holds */
+        if (it == 0) {
+            /* the degrees of freedom the closed contacts, stops and frictions
+             * hold: those whose column changes when they are all let go (a
+             * spring, an actuator or gravity alone does not make a DoF take part) */
             double cmax = 0;
+            if ((st = free_jacobian(m, d, &c, delta, r1, V, fd_h, save)) != CD_OK) goto out;
             for (j = 0; j < n; j++) {
-                double cn = 0;
-                for (i = 0; i < n; i++) cn += J[i * n + j] * J[i * n + j];
+                double cn = 0, ca = 0;
+                for (i = 0; i < n; i++) {
+                    double dd = J[i * n + j] - V[i * n + j];
+                    cn += dd * dd;
+                    ca += J[i * n + j] * J[i * n + j];
+                }
                 work[j] = sqrt(cn);
-                if (work[j] > cmax) cmax = work[j];
+                if (sqrt(ca) > cmax) cmax = sqrt(ca);
             }
             np = 0;
             for (j = 0; j < n; j++) { part[j] = work[j] > 1e-13 * cmax && cmax > 0; np += part[j]; }

@@ -41,6 +41,7 @@ cd_status cd_forward(const cd_model *m, cd_data *d)
     cd_contact_eval(m, d, d->ydot + m->ny_slot_adr);
     cd_joint_passive(m, d, d->ydot + m->ny_fric_adr);
     cd_actuation(m, d);
+    if (m->nfinger) cd_gripper_torques(m, d);
     for (i = 0; i < m->nv; i++) d->tau[i] = d->qfrc_actuator[i] + d->qfrc_passive[i] + d->qfrc_applied[i];
     st = cd_forward_dynamics(m, d);
     if (st == CD_OK) {

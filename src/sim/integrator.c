@@ -48,8 +48,14 @@
 #include <string.h>
 
 /* Reserve of evaluations a located event needs after its iterations: the
- * landing (1) and the zero-time mode cascade (settle_modes: at most 5). */
-#define CD_BUDGET_RESERVE 6
+ * landing (1), the zero-time mode cascade (settle_modes: at most 5) and, in
+ * fixed-step mode, the rest of the step (one RK4 step from the event with
+ * its end evaluation: 4). */
+#define CD_BUDGET_RESERVE 10
+/* The least budget a fixed step can keep to: the re-check after a changed
+ * input (settle_modes: <= 5), the step (4), the located event's bracket start
+ * (1) and the reserve. Breakpoints inside the step split it (4 more each). */
+#define CD_STEP_MIN_EVALS (5 + 4 + 1 + CD_BUDGET_RESERVE)
 
 typedef struct {
     const cd_model *m;        /* set for the duration of one call only: the data keeps no model pointer */
@@ -61,7 +67,12 @@ typedef struct {
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
     double *in_snap;          /* inputs at the end of the last call */
     double *y_end;            /* y at the end of the last call */
-    int nin;                  /* inputs: nu + nv + 12 nbody */
+    int nin;                  /* inputs: nu + nv + 12 nbody + nuser (user modes) */
+    cd_control_fn ctl_fn;     /* the callbacks at the end of the last call */
+    void *ctl_user, *sw_user;
+    cd_user_switch_fn sw_fn;
+    cd_user_transition_fn tr_fn;
+    double hfix_set;          /* opt.h_fixed the fixed step was taken from */
     double t_end, h;          /* time at the end of the last call; next trial step */
     double rtol_set, atol_set;/* the tolerances the GSL control was made with */
     double step_t0, step_h;   /* cd_step: origin and step; t = step_t0 + step_k step_h */
@@ -126,7 +137,7 @@ void cd_integ_free(void *p)
 
 size_t cd_integ_size(const cd_model *m)
 {
-    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody);
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
     /* the struct, then 13 n + nin doubles */
     return sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double);
 }
@@ -134,7 +145,7 @@ size_t cd_integ_size(const cd_model *m)
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
 {
     const gsl_odeiv2_step_type *T = NULL;
-    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody);
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
     cd_integ *I = (cd_integ *)mem;
     double *p;
     memset(I, 0, cd_integ_size(m));
@@ -187,6 +198,7 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     cd_integ *I = (cd_integ *)d->integ;
     (void)m;
     I->h = I->fixed ? d->opt.h_fixed : d->opt.h_init;
+    I->hfix_set = d->opt.h_fixed;
     if (I->drv) gsl_odeiv2_driver_reset(I->drv);
     if (I->loc) gsl_odeiv2_step_reset(I->loc);
     I->have_end = 0;
@@ -490,30 +502,38 @@ static int schedule_rows(const cd_model *m, cd_data *d, int log)
     return any;
 }
 
-/* the caller's inputs, gathered for comparison */
-static void inputs_get(const cd_model *m, const cd_data *d, double *buf)
+/* The caller's inputs against the snapshot of the last call's end: returns 1
+ * if any differs; with copy, the snapshot takes them. The callbacks count as
+ * inputs too (compared by pointer). */
+static int inputs_sync(const cd_model *m, cd_data *d, cd_integ *I, int copy)
 {
-    memcpy(buf, d->ctrl, (size_t)m->nu * sizeof(double));
-    buf += m->nu;
-    memcpy(buf, d->qfrc_applied, (size_t)m->nv * sizeof(double));
-    buf += m->nv;
-    memcpy(buf, d->xfrc_applied, 6 * (size_t)m->nbody * sizeof(double));
-    buf += 6 * m->nbody;
-    memcpy(buf, d->xfrc_body, 6 * (size_t)m->nbody * sizeof(double));
+    const double *src[4] = {d->ctrl, d->qfrc_applied, d->xfrc_applied, d->xfrc_body};
+    int len[4] = {m->nu, m->nv, 6 * m->nbody, 6 * m->nbody}, k, i, diff = 0;
+    double *p = I->in_snap;
+    for (k = 0; k < 4; p += len[k], k++) {
+        if (!diff && memcmp(p, src[k], (size_t)len[k] * sizeof(double)) != 0) diff = 1;
+        if (copy) memcpy(p, src[k], (size_t)len[k] * sizeof(double));
+    }
+    for (i = 0; i < m->nuser; i++) {
+        if (p[i] != (double)d->user_mode[i]) diff = 1;
+        if (copy) p[i] = d->user_mode[i];
+    }
+    if (I->ctl_fn != d->control || I->ctl_user != d->control_user || I->sw_fn != d->user_switch ||
+        I->tr_fn != d->user_transition || I->sw_user != d->switch_user)
+        diff = 1;
+    if (copy) {
+        I->ctl_fn = d->control; I->ctl_user = d->control_user;
+        I->sw_fn = d->user_switch; I->tr_fn = d->user_transition; I->sw_user = d->switch_user;
+    }
+    return diff;
 }
-
-static int inputs_changed(const cd_model *m, const cd_data *d, const cd_integ *I)
-{
-    return memcmp(I->in_snap, d->ctrl, (size_t)m->nu * sizeof(double)) ||
-           memcmp(I->in_snap + m->nu, d->qfrc_applied, (size_t)m->nv * sizeof(double)) ||
-           memcmp(I->in_snap + m->nu + m->nv, d->xfrc_applied, 6 * (size_t)m->nbody * sizeof(double)) ||
-           memcmp(I->in_snap + m->nu + m->nv + 6 * m->nbody, d->xfrc_body, 6 * (size_t)m->nbody * sizeof(double));
-}
+static int inputs_changed(const cd_model *m, cd_data *d, cd_integ *I) { return inputs_sync(m, d, I, 0); }
+static void inputs_get(const cd_model *m, cd_data *d, cd_integ *I) { (void)inputs_sync(m, d, I, 1); }
 
 static void remember_end(const cd_model *m, cd_data *d, cd_integ *I)
 {
     memcpy(I->y_end, d->y, (size_t)m->ny * sizeof(double));
-    inputs_get(m, d, I->in_snap);
+    inputs_get(m, d, I);
     I->t_end = d->t;
     I->have_end = 1;
 }
@@ -539,6 +559,10 @@ static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st,
     }
     I->m = m;
     I->nrhs0 = d->stats.nrhs;
+    if (I->fixed && d->opt.h_fixed != I->hfix_set) { /* a runtime option: the new fixed step from now on */
+        I->h = d->opt.h_fixed;
+        I->hfix_set = d->opt.h_fixed;
+    }
     if (!I->fixed && (d->opt.rtol != I->rtol_set || d->opt.atol != I->atol_set)) {
         gsl_odeiv2_control_init(I->drv->c, d->opt.atol, d->opt.rtol, 1.0, 1.0);
         I->rtol_set = d->opt.rtol;
@@ -555,24 +579,31 @@ static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st,
     return need;
 }
 
+/* *started is set once the call got past its argument and option checks
+ * (a rejected call leaves no trace: the next one still sees the caller's
+ * changes). */
 static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
-                         cd_error *err)
+                         cd_error *err, int *started)
 {
     cd_integ *I = (cd_integ *)d->integ;
     long attempts = 0;
-    int changed, need_settle;
+    int changed, need_settle, hit_break = 0;
     cd_status st;
+    *started = 0;
     if (!(t_end >= d->t) || !isfinite(t_end)) {
         seterr(err, CD_EINVAL, "t_end must be finite and not before the current time", d->t);
         return CD_EINVAL;
     }
     need_settle = begin_call(m, d, I, &st, err);
     if (st != CD_OK) return st;
+    *started = 1;
     while (d->t < t_end) {
         double t0 = d->t, t1 = t_end, tdw, tbr, g1;
         int status, at_dwell_end, at_break;
-        /* a schedule breakpoint reached: new rows, restart, re-check the modes */
-        if (schedule_rows(m, d, 1)) { restart(d, I); need_settle = 1; }
+        /* a schedule breakpoint reached (rows, waypoints, clutch schedules):
+         * new rows, restart, re-check the modes */
+        if (schedule_rows(m, d, 1) || hit_break) { restart(d, I); need_settle = 1; }
+        hit_break = 0;
         /* modes are re-checked on entry (the caller may have edited y or the
          * inputs), at breakpoints and where a dwell expired; after an
          * ordinary step the end-of-step evaluation has already shown them consistent */
@@ -584,7 +615,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                 restart(d, I);
                 I->fsal = 1;
                 if (cb && cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
-                if (inputs_changed(m, d, I)) { restart(d, I); need_settle = 1; inputs_get(m, d, I->in_snap); continue; }
+                if (inputs_changed(m, d, I)) { restart(d, I); need_settle = 1; inputs_get(m, d, I); continue; }
             }
         }
         tdw = next_dwell_end(m, d);
@@ -637,6 +668,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         I->fsal = 1;
         g1 = gmin(m, d, 1, NULL);
         if (at_dwell_end && d->t == t1) need_settle = 1;
+        if (at_break && d->t == t1) hit_break = 1;
         if (g1 < 0) {
             int trig = -1;
             I->fsal = 0;
@@ -672,7 +704,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             return CD_ESTALL;
         }
         if (cb) {
-            inputs_get(m, d, I->in_snap);
+            inputs_get(m, d, I);
             if (cb(m, d, user)) { seterr(err, CD_EINTERRUPT, "stopped by the caller", d->t); return CD_EINTERRUPT; }
             /* inputs written by the callback take effect from this instant */
             if (inputs_changed(m, d, I)) { restart(d, I); need_settle = 1; }
@@ -694,8 +726,9 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                          cd_error *err)
 {
     cd_integ *I = (cd_integ *)d->integ;
-    cd_status st = advance(m, d, t_end, cb, user, err);
-    remember_end(m, d, I);
+    int started;
+    cd_status st = advance(m, d, t_end, cb, user, err, &started);
+    if (started) remember_end(m, d, I);
     I->m = NULL;
     return st;
 }
@@ -704,14 +737,17 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 {
     cd_integ *I = (cd_integ *)d->integ;
     double t_target, hsave = I->h;
+    int started;
     cd_status st;
     if (!(h > 0) || !isfinite(h)) {
         cd_error_set(err, CD_EINVAL, "cd_step: h must be positive and finite, got %g", h);
         return CD_EINVAL;
     }
-    if (I->fixed && d->opt.max_evals > 0 && d->opt.max_evals < 4 + CD_BUDGET_RESERVE) {
-        cd_error_set(err, CD_EBUDGET, "cd_step: max_evals %ld cannot cover one RK4 step and its event reserve (%d)",
-                     d->opt.max_evals, 4 + CD_BUDGET_RESERVE);
+    if (I->fixed && d->opt.max_evals > 0 && d->opt.max_evals < CD_STEP_MIN_EVALS) {
+        cd_error_set(err, CD_EBUDGET,
+                     "cd_step: max_evals %ld cannot cover a fixed step with an event (at least %d: the re-check of a "
+                     "changed input 5, the step 4, the event's bracket start 1 and reserve %d)",
+                     d->opt.max_evals, CD_STEP_MIN_EVALS, CD_BUDGET_RESERVE);
         return CD_EBUDGET;
     }
     /* the time grid: a new origin where h changes or the caller moved t */
@@ -722,10 +758,10 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
     }
     t_target = I->step_t0 + (double)(I->step_k + 1) * h;
     if (I->fixed) I->h = t_target - d->t;
-    st = advance(m, d, t_target, NULL, NULL, err);
+    st = advance(m, d, t_target, NULL, NULL, err, &started);
     if (I->fixed) I->h = hsave;
     if (st == CD_OK) I->step_k++;
-    remember_end(m, d, I);
+    if (started) remember_end(m, d, I);
     I->m = NULL;
     return st;
 }
@@ -733,7 +769,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 /* ---- the integrator's part of the complete state ------------------------------ */
 #define INTEG_FIXED_WORDS 10
 
-int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody; }
+int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody + m->nuser; }
 
 void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
 {
@@ -744,7 +780,7 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     b[0] = I->h; b[1] = I->t_end; b[2] = I->step_t0; b[3] = I->step_h; b[4] = (double)I->step_k;
     b[5] = I->have_end; b[6] = I->fsal; b[7] = I->restart_pending; b[8] = I->rtol_set; b[9] = I->atol_set;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
-    memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)(m->nu + m->nv + 12 * m->nbody) * sizeof(double));
+    memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
 
 void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
@@ -753,7 +789,10 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     I->h = b[0]; I->t_end = b[1]; I->step_t0 = b[2]; I->step_h = b[3]; I->step_k = (long)b[4];
     I->have_end = (int)b[5]; I->fsal = (int)b[6]; I->restart_pending = (int)b[7];
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
-    memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)(m->nu + m->nv + 12 * m->nbody) * sizeof(double));
+    memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
+    /* callbacks are this process's: the restored data keeps its own, unchanged */
+    I->ctl_fn = d->control; I->ctl_user = d->control_user;
+    I->sw_fn = d->user_switch; I->tr_fn = d->user_transition; I->sw_user = d->switch_user;
     /* the GSL stepper: explicit ones keep nothing between steps but h; a
      * history stepper restarts (restart_pending is set in its snapshots) */
     if (I->drv) {

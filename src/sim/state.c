@@ -17,6 +17,7 @@ static size_t body_size(const cd_model *m)
            + (size_t)4 * m->nslot                                /* slot mode, slip direction */
            + (size_t)3 * m->nsw                                  /* switch times, counters, held */
            + (size_t)m->nlim + (size_t)2 * m->nfric + (size_t)m->nuser + (size_t)m->nu /* modes, rows */
+           + (size_t)2 * m->nfinger                                                    /* clutches */
            + (size_t)m->nu + (size_t)m->nv + (size_t)12 * m->nbody;                     /* inputs */
 }
 
@@ -65,6 +66,8 @@ void cd_state_get(const cd_model *m, cd_data *d, double *buf)
     put_d(&p, d->fric_dir, m->nfric);
     put_ints(&p, d->user_mode, m->nuser);
     put_ints(&p, d->act_piece, m->nu);
+    put_ints(&p, d->finger_mode, m->nfinger);
+    put_d(&p, d->finger_brake, m->nfinger);
     put_d(&p, d->ctrl, m->nu);
     put_d(&p, d->qfrc_applied, m->nv);
     put_d(&p, d->xfrc_applied, 6 * m->nbody);
@@ -74,12 +77,13 @@ void cd_state_get(const cd_model *m, cd_data *d, double *buf)
 
 cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_error *err)
 {
-    const double *p = buf + HEADER;
+    const double *p;
     if (!buf || buf[0] != STATE_MAGIC || buf[1] != m->ny || buf[2] != m->nslot || buf[3] != m->nsw ||
         buf[4] != m->nu || buf[5] != (double)cd_state_size(m)) {
         cd_error_set(err, CD_EINVAL, "cd_state_set: the buffer is not a state of this model (magic or sizes differ)");
         return CD_EINVAL;
     }
+    p = buf + HEADER;
     d->t = *p++;
     get_d(&p, d->y, m->ny);
     get_ints(&p, d->slot_mode, m->nslot);
@@ -92,6 +96,8 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
     get_d(&p, d->fric_dir, m->nfric);
     get_ints(&p, d->user_mode, m->nuser);
     get_ints(&p, d->act_piece, m->nu);
+    get_ints(&p, d->finger_mode, m->nfinger);
+    get_d(&p, d->finger_brake, m->nfinger);
     get_d(&p, d->ctrl, m->nu);
     get_d(&p, d->qfrc_applied, m->nv);
     get_d(&p, d->xfrc_applied, 6 * m->nbody);
@@ -107,7 +113,7 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
 
 cd_status cd_state_copy(const cd_model *m, cd_data *dst, cd_data *src, cd_error *err)
 {
-    /* through dst's integrator scratch would need a buffer: use the event ring? no: a direct copy */
+    /* one temporary buffer from dst's allocator (documented: this call allocates) */
     size_t n = cd_state_size(m);
     double *tmp = dst->allocator.alloc(n * sizeof(double), dst->allocator.ctx);
     cd_status st;

@@ -21,6 +21,8 @@ void cd_sw_functions(const cd_model *m, const cd_data *d, int u, int forgive, do
     i -= m->nlim;
     if (i < m->nfric) { cd_fric_functions(m, d, i, forgive, g); return; }
     i -= m->nfric;
+    if (i < m->nfinger) { cd_finger_functions(m, d, i, g); return; }
+    i -= m->nfinger;
     g[0] = d->user_switch(m, d, i, d->switch_user);
     if (g[0] != g[0]) g[0] = 1.0; /* a NaN from a user function never fires */
     g[1] = 1.0;
@@ -37,6 +39,8 @@ int cd_sw_transition(const cd_model *m, cd_data *d, int u, int forgive, cd_event
     i -= m->nlim;
     if (i < m->nfric) return cd_fric_transition(m, d, i, ev);
     i -= m->nfric;
+    if (i < m->nfinger) return cd_finger_transition(m, d, i, ev);
+    i -= m->nfinger;
     {
         double g[2];
         int from = d->user_mode[i];

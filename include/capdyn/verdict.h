@@ -1,0 +1,73 @@
+/* capdyn: capture verdicts and figures of merit of a grasp or a capture run
+ * (issue 8; docs/grippers.md). A monitor watches a run sample by sample and
+ * decides, from the physics only:
+ *   captured    the object is enclosed by the hand (its centre of mass inside
+ *               the polygon of the palm face and the fingers, in the fingers'
+ *               plane), its velocity relative to the palm has decayed below
+ *               v_max and w_max, the fingers have stopped (every hand joint
+ *               rate below w_max: the grasp has settled, it is not still
+ *               closing), and the set of its contacts has not changed for
+ *               `dwell` seconds;
+ *   escaped     its centre of mass left the hand's workspace (a sphere of
+ *               radius `workspace` about the palm centre);
+ *   unresolved  neither, when the run ends.
+ * It also keeps the figures of merit: time to capture, peak contact force,
+ * peak joint torque of the hand, contacts at the end (stick / slip), the
+ * final offset of the object from the palm centre. No allocation after
+ * cd_monitor_init, no printing. */
+#ifndef CAPDYN_VERDICT_H
+#define CAPDYN_VERDICT_H
+
+#include "capdyn/sim.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+typedef enum { CD_VERDICT_UNRESOLVED = 0, CD_VERDICT_CAPTURED = 1, CD_VERDICT_ESCAPED = 2 } cd_verdict;
+const char *cd_verdict_name(cd_verdict v);
+
+typedef struct {
+    int hand;             /* system of the hand (its base is the palm) */
+    int object;           /* system of the object (a free base) */
+    double v_max;         /* [m/s] relative speed below which it is at rest, default 1e-3 */
+    double w_max;         /* [rad/s] relative angular speed, default 0.05 */
+    double dwell;         /* [s] the contact set must hold this long, default 0.2 */
+    double workspace;     /* [m] escape radius about the palm centre; 0 = 1.5 x (palm half-diagonal
+                             + the longest finger's reach), computed at init */
+} cd_monitor_opts;
+
+/* Defaults above, hand and object -1 (must be set). */
+cd_monitor_opts cd_monitor_opts_default(void);
+
+typedef struct {
+    cd_monitor_opts opt;
+    cd_verdict verdict;
+    double t_capture;     /* [s] first time every condition held (NaN if never) */
+    double t_escape;      /* [s] (NaN if never) */
+    double peak_fn;       /* [N] largest normal force on the object, any slot, any sample */
+    double peak_tau;      /* [N m] largest |joint torque| (actuator + passive) of the hand */
+    int n_stick, n_slip;  /* object contacts at the end */
+    double offset[3];     /* [m] object CoM - palm centre at the end, palm frame */
+    double offset_norm;
+    int enclosed;         /* at the last sample */
+    double v_rel, w_rel;  /* at the last sample */
+    double qd_max;        /* largest hand joint rate at the last sample [rad/s | m/s] */
+    /* private */
+    double t_set;         /* since when the contact set is unchanged */
+    unsigned long set_hash;
+    double reach;
+} cd_monitor;
+
+/* Prepares a monitor for a run of d (at its initial state). CD_EINVAL if the
+ * hand or object is not a valid system, or the object has no free base. */
+cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, const cd_monitor_opts *opt,
+                          cd_error *err);
+/* Looks at the current state (after an evaluation); call it at every
+ * sample or accepted step. A verdict, once reached, is kept. */
+void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d);
+
+#ifdef __cplusplus
+}
+#endif
+#endif

@@ -1,0 +1,247 @@
+/* Capture verdicts (include/capdyn/verdict.h, docs/grippers.md).
+ *
+ * Enclosure, in the fingers' plane: for a hand whose fingers all turn about
+ * parallel axes (two opposed fingers), the object's centre of mass must lie
+ * inside the polygon that runs up one finger (joint origins, then its tip:
+ * the farthest check point of its last link), across, and down the other
+ * fingers, closed by the palm between the finger bases. For other hands
+ * (three fingers at 120 deg) the cage test: the centre of mass must lie
+ * above the palm face, below the highest finger point, and on the inner side
+ * of every finger (the side its joint axis closes toward). */
+#include "capdyn/verdict.h"
+#include "../math/cd_math.h"
+
+#include <math.h>
+#include <string.h>
+
+const char *cd_verdict_name(cd_verdict v)
+{
+    switch (v) {
+    case CD_VERDICT_CAPTURED: return "captured";
+    case CD_VERDICT_ESCAPED: return "escaped";
+    default: return "unresolved";
+    }
+}
+
+cd_monitor_opts cd_monitor_opts_default(void)
+{
+    cd_monitor_opts o;
+    o.hand = o.object = -1;
+    o.v_max = 1e-3;
+    o.w_max = 0.05;
+    o.dwell = 0.2;
+    o.workspace = 0;
+    return o;
+}
+
+/* the first link of each finger: the hand base's direct children */
+#define MAXF 16
+static int fingers(const cd_model *m, int hand, int *first)
+{
+    int b0 = m->sys_body_adr[hand], b, n = 0;
+    for (b = b0 + 1; b < b0 + m->sys_nbody[hand] && n < MAXF; b++)
+        if (m->body_parent[b] == b0) first[n++] = b;
+    return n;
+}
+
+/* the chain from a finger's first link to its tip (following the first child) */
+static int chain(const cd_model *m, int hand, int first, int *out, int cap)
+{
+    int b0 = m->sys_body_adr[hand], end = b0 + m->sys_nbody[hand], n = 0, cur = first, b;
+    while (cur >= 0 && n < cap) {
+        int next = -1;
+        out[n++] = cur;
+        for (b = cur + 1; b < end; b++)
+            if (m->body_parent[b] == cur) { next = b; break; }
+        cur = next;
+    }
+    return n;
+}
+
+/* tip of a link: its farthest check point from the joint (world), else its CoM mirrored */
+static void tip_of(const cd_model *m, const cd_data *d, int b, double tip[3])
+{
+    int k, best = -1;
+    double dmax = -1, t[3];
+    for (k = 0; k < m->ncp; k++)
+        if (m->cp_body[k] == b) {
+            double dd = cd_v3_norm(m->cp_pos + 3 * k) + m->cp_radius[k];
+            if (dd > dmax) { dmax = dd; best = k; }
+        }
+    if (best >= 0) {
+        double p[3];
+        cd_v3_copy(p, m->cp_pos + 3 * best);
+        if (cd_v3_norm(p) > 0) cd_v3_scale(p, p, (cd_v3_norm(p) + m->cp_radius[best]) / cd_v3_norm(p));
+        cd_m3_mulv(t, d->body_R + 9 * b, p);
+    } else {
+        double c2[3];
+        cd_v3_scale(c2, m->body_com + 3 * b, 2.0);
+        cd_m3_mulv(t, d->body_R + 9 * b, c2);
+    }
+    cd_v3_add(tip, d->body_x + 3 * b, t);
+}
+
+static int in_polygon(const double (*p)[2], int n, double x, double y)
+{
+    int i, j, in = 0;
+    for (i = 0, j = n - 1; i < n; j = i++)
+        if ((p[i][1] > y) != (p[j][1] > y) && x < (p[j][0] - p[i][0]) * (y - p[i][1]) / (p[j][1] - p[i][1]) + p[i][0])
+            in = !in;
+    return in;
+}
+
+static int enclosed(const cd_model *m, const cd_data *d, int hand, const double c[3])
+{
+    int first[MAXF], nf = fingers(m, hand, first), f, k, parallel = 1;
+    double ax0[3];
+    if (nf < 2) return 0;
+    cd_v3_copy(ax0, d->body_axisw + 3 * first[0]);
+    for (f = 1; f < nf; f++)
+        if (fabs(fabs(cd_v3_dot(ax0, d->body_axisw + 3 * first[f])) - 1.0) > 1e-6) parallel = 0;
+    if (parallel) {
+        /* the polygon up finger 0, down finger 1 (.. and the others), in the plane normal to the axis */
+        double u[3], v[3], poly[2 * 64][2], tip[3], r[3];
+        int np = 0, ch[32], nc;
+        u[0] = 1; u[1] = 0; u[2] = 0;
+        if (fabs(ax0[0]) > 0.9) { u[0] = 0; u[1] = 1; }
+        cd_v3_cross(v, ax0, u);
+        cd_v3_normalize(v);
+        cd_v3_cross(u, v, ax0);
+        for (f = 0; f < nf && f < 2; f++) {
+            double pts[33][3];
+            int np0 = 0;
+            nc = chain(m, hand, first[f], ch, 32);
+            for (k = 0; k < nc; k++) cd_v3_copy(pts[np0++], d->body_x + 3 * ch[k]);
+            tip_of(m, d, ch[nc - 1], tip);
+            cd_v3_copy(pts[np0++], tip);
+            for (k = 0; k < np0; k++) {
+                const double *q = f == 0 ? pts[k] : pts[np0 - 1 - k];
+                cd_v3_sub(r, q, c);
+                poly[np][0] = cd_v3_dot(r, u);
+                poly[np][1] = cd_v3_dot(r, v);
+                np++;
+            }
+        }
+        return in_polygon((const double (*)[2])poly, np, 0.0, 0.0);
+    }
+    {
+        /* the cage: above the palm face, below the highest finger point, inside every finger */
+        const double *R0 = d->body_R + 9 * m->sys_body_adr[hand], *x0 = d->body_x + 3 * m->sys_body_adr[hand];
+        double up[3] = {R0[1], R0[4], R0[7]}, rc[3], hmax = -HUGE_VAL, hbase = HUGE_VAL;
+        cd_v3_sub(rc, c, x0);
+        for (f = 0; f < nf; f++) {
+            int ch[32], nc = chain(m, hand, first[f], ch, 32);
+            double tip[3], r[3], inward[3], h;
+            tip_of(m, d, ch[nc - 1], tip);
+            cd_v3_sub(r, tip, x0);
+            h = cd_v3_dot(r, up);
+            if (h > hmax) hmax = h;
+            cd_v3_sub(r, d->body_x + 3 * first[f], x0);
+            h = cd_v3_dot(r, up);
+            if (h < hbase) hbase = h;
+            /* inner side: the direction the base joint closes the finger, at its base */
+            {
+                double arm[3], base[3];
+                cd_v3_copy(base, d->body_x + 3 * first[f]);
+                cd_v3_sub(arm, tip, base);
+                cd_v3_cross(inward, d->body_axisw + 3 * first[f], arm);
+                cd_v3_sub(r, c, base);
+                if (cd_v3_dot(r, inward) < 0) return 0;
+            }
+        }
+        {
+            double h = cd_v3_dot(rc, up);
+            return h > hbase && h < hmax;
+        }
+    }
+}
+
+cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, const cd_monitor_opts *opt,
+                          cd_error *err)
+{
+    int first[MAXF], nf, f, k, hb;
+    double reach = 0;
+    memset(mo, 0, sizeof *mo);
+    mo->opt = opt ? *opt : cd_monitor_opts_default();
+    if (mo->opt.hand < 0 || mo->opt.hand >= m->nsys || mo->opt.object < 0 || mo->opt.object >= m->nsys ||
+        mo->opt.hand == mo->opt.object) {
+        cd_error_set(err, CD_EINVAL, "verdict: hand %d and object %d must be two systems of the model", mo->opt.hand,
+                     mo->opt.object);
+        return CD_EINVAL;
+    }
+    if (m->sys_base_type[mo->opt.object] != CD_BASE_FREE) {
+        cd_error_set(err, CD_EINVAL, "verdict: the object '%s' must be free-floating", m->sys_name[mo->opt.object]);
+        return CD_EINVAL;
+    }
+    hb = m->sys_body_adr[mo->opt.hand];
+    nf = fingers(m, mo->opt.hand, first);
+    for (f = 0; f < nf; f++) {
+        int ch[32], nc = chain(m, mo->opt.hand, first[f], ch, 32);
+        double tip[3], r[3];
+        tip_of(m, d, ch[nc - 1], tip);
+        cd_v3_sub(r, tip, d->body_x + 3 * hb);
+        if (cd_v3_norm(r) > reach) reach = cd_v3_norm(r);
+    }
+    for (k = 0; k < m->nshape; k++)
+        if (m->shape_body[k] == hb) {
+            double s = cd_v3_norm(m->shape_size + 3 * k);
+            if (s > reach) reach = s;
+        }
+    mo->reach = reach;
+    if (mo->opt.workspace <= 0) mo->opt.workspace = 1.5 * reach;
+    mo->verdict = CD_VERDICT_UNRESOLVED;
+    mo->t_capture = mo->t_escape = NAN;
+    mo->t_set = d->t;
+    mo->set_hash = 0;
+    return CD_OK;
+}
+
+void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
+{
+    int hand = mo->opt.hand, obj = mo->opt.object, hb = m->sys_body_adr[hand], ob = m->sys_body_adr[obj], k, b;
+    unsigned long h = 1469598103UL;
+    double c[3], r[3], vp[3], t3[3], wrel[3];
+    int ncontact = 0;
+    mo->n_stick = mo->n_slip = 0;
+    for (k = 0; k < m->nslot; k++) {
+        int a = m->cp_body[m->slot_cp[k]], s = m->shape_body[m->slot_shape[k]];
+        if (m->body_sys[a] != obj && m->body_sys[s] != obj) continue;
+        if (d->slot_mode[k] == CD_MODE_OPEN) continue;
+        ncontact++;
+        h = (h ^ (unsigned long)k) * 16777619UL;
+        if (d->slot_mode[k] == CD_MODE_STICK) mo->n_stick++; else mo->n_slip++;
+        if (d->slot_fn[k] > mo->peak_fn) mo->peak_fn = d->slot_fn[k];
+    }
+    if (h != mo->set_hash) { mo->set_hash = h; mo->t_set = d->t; }
+    mo->qd_max = 0;
+    for (b = hb + 1; b < hb + m->sys_nbody[hand]; b++) {
+        int v = m->body_dof[b];
+        double tau = fabs(d->qfrc_actuator[v] + d->qfrc_passive[v]), qd = fabs(cd_joint_qd(m, d, b));
+        if (tau > mo->peak_tau) mo->peak_tau = tau;
+        if (qd > mo->qd_max) mo->qd_max = qd;
+    }
+    cd_v3_copy(c, d->body_c + 3 * ob);
+    cd_v3_sub(r, c, d->body_x + 3 * hb);
+    cd_m3_tmulv(mo->offset, d->body_R + 9 * hb, r);
+    mo->offset_norm = cd_v3_norm(r);
+    /* velocity relative to the palm at the object's CoM */
+    cd_v3_sub(t3, c, d->body_c + 3 * hb);
+    cd_v3_cross(vp, d->body_w + 3 * hb, t3);
+    cd_v3_add(vp, vp, d->body_v + 3 * hb);
+    cd_v3_sub(vp, d->body_v + 3 * ob, vp);
+    cd_v3_sub(wrel, d->body_w + 3 * ob, d->body_w + 3 * hb);
+    mo->v_rel = cd_v3_norm(vp);
+    mo->w_rel = cd_v3_norm(wrel);
+    mo->enclosed = enclosed(m, d, hand, c);
+    if (mo->verdict != CD_VERDICT_UNRESOLVED) return;
+    if (mo->offset_norm > mo->opt.workspace) {
+        mo->verdict = CD_VERDICT_ESCAPED;
+        mo->t_escape = d->t;
+        return;
+    }
+    if (mo->enclosed && ncontact > 0 && mo->v_rel < mo->opt.v_max && mo->w_rel < mo->opt.w_max &&
+        mo->qd_max < mo->opt.w_max && d->t - mo->t_set >= mo->opt.dwell) {
+        mo->verdict = CD_VERDICT_CAPTURED;
+        mo->t_capture = d->t;
+    }
+}

@@ -1,0 +1,299 @@
+/* Clutched fingers (issue 8): the Space Gripper's synchronised closing and
+ * clutch to equal pressure, the Barrett TorqueSwitch. Closed forms: a joint
+ * held still (prescribed) makes the coupling load a known ramp; a free link
+ * on a ramp lags by D_w w / K_w. */
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include "scene_util.h"
+#include <math.h>
+#include <string.h>
+
+static const cd_event *first_kind(const cd_data *d, int kind, int *count)
+{
+    long i;
+    const cd_event *r = NULL;
+    *count = 0;
+    for (i = 0; i < d->ev_count && i < d->ev_cap; i++)
+        if (cd_data_event(d, i)->kind == kind) {
+            if (!r) r = cd_data_event(d, i);
+            (*count)++;
+        }
+    return r;
+}
+
+/* a palm with one finger of n links along +y turning about z; joint 0
+ * (hold0 = 1) or every joint (hold0 = 2) held at 0 by a prescribed constant
+ * profile */
+static cd_model *finger_model(int n, int hold0, cd_finger_type type, double thr, double Kw, double Dw, double w,
+                              double open_at, int *b)
+{
+    cd_model *m = cd_model_create();
+    cd_link_desc l = cd_link_desc_default();
+    cd_finger_desc f = cd_finger_desc_default();
+    cd_error e;
+    double st[3] = {0, 10, 20}, sq[3] = {0, 10 * w, 10 * w - 10 * w};
+    int j;
+    add_system(m, "palm", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    for (j = 0; j < n; j++) {
+        l.parent = j == 0 ? 0 : b[j - 1];
+        l.pos[1] = j == 0 ? 0 : 0.05;
+        l.com[1] = 0.025;
+        l.mass = 0.05;
+        memset(l.inertia, 0, sizeof l.inertia);
+        l.inertia[0] = l.inertia[4] = l.inertia[8] = 1e-5;
+        b[j] = cd_model_add_link(m, 0, &l, &e);
+        cr_assert(b[j] > 0, "%s", e.msg);
+    }
+    for (j = 0; j < (hold0 == 2 ? n : hold0); j++) {
+        cd_joint_props p = cd_joint_props_default();
+        double tt = 100.0, qq = 0.0;
+        p.prescribe = CD_PRESCRIBE_WAYPOINTS; p.presc_t = &tt; p.presc_q = &qq; p.npresc = 1;
+        cr_assert_eq(cd_model_set_joint(m, b[j], &p, &e), CD_OK, "%s", e.msg);
+    }
+    f.name = "f0";
+    f.type = type;
+    f.njoint = n;
+    f.joint_body = b;
+    f.wire_K = Kw;
+    f.wire_D = Dw;
+    f.threshold = thr;
+    f.grasp_torque = 0.01;
+    f.sched_t = st; f.sched_q = sq; f.nsched = open_at > 0 ? 3 : 2;
+    f.open_at = open_at;
+    cr_assert(cd_model_add_finger(m, &f, &e) == 0, "%s", e.msg);
+    m->opt.rtol = 1e-11; m->opt.atol = 1e-14; m->opt.h_max = 1e-3;
+    {
+        cd_error e2;
+        cr_assert_eq(cd_model_finalize(m, &e2), CD_OK, "%s", e2.msg);
+    }
+    return m;
+}
+
+Test(gripper, space_clutch_fires_once_at_its_threshold_then_equal_pressure)
+{
+    /* The joints are held at 0, the schedule ramps at w = 1 rad/s: the coupling
+     * load on each is K_w w t, so the clutch must fire at t = thr / (K_w w)
+     * (located to 1e-9 s), exactly once; afterwards every joint takes
+     * ratio_j x grasp_torque, the quadratic split 9 : 4 : 1 (1e-12). */
+    int b[3], n;
+    double Kw = 20.0, thr = 0.05, t_ex = thr / (Kw * 1.0);
+    cd_model *m = finger_model(3, 2, CD_FINGER_SPACE, thr, Kw, 0.0, 1.0, 0.0, b);
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e);
+    const cd_event *ev;
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 0.01, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    ev = first_kind(d, CD_EV_CLUTCH, &n);
+    cr_assert(ev, "no clutch event");
+    cr_expect_eq(n, 1, "clutch events: %d", n);
+    cr_expect_lt(fabs(ev->t - t_ex), 1e-9, "clutch at %.12g s, threshold reached at %.12g s", ev->t, t_ex);
+    cr_expect_eq(ev->owner_kind, CD_OWNER_FINGER);
+    cr_expect_eq(ev->owner, 0);
+    cr_expect_eq(d->finger_mode[0], CD_CLUTCH_RELEASED);
+    {
+        double want[3] = {9 * 0.01, 4 * 0.01, 1 * 0.01};
+        int j;
+        for (j = 0; j < 3; j++)
+            cr_expect_lt(fabs(d->qfrc_actuator[m->body_dof[b[j]]] - want[j]), 1e-12, "joint %d: %.17g", j,
+                         d->qfrc_actuator[m->body_dof[b[j]]]);
+    }
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(gripper, space_joints_follow_the_schedule_within_the_coupling_compliance)
+{
+    /* A free one-link finger on the ramp theta_s = w t, critically damped
+     * wire: after the transient the steady lag is D_w w / K_w (the spring
+     * supplies the damper's torque), to 1e-8 rad. The clutch never fires. */
+    int b[1], n;
+    double I = 1e-5 + 0.05 * 0.025 * 0.025, Kw = 5.0, Dw = 2 * sqrt(Kw * I), w = 0.5;
+    cd_model *m = finger_model(1, 0, CD_FINGER_SPACE, 1.0, Kw, Dw, w, 0.0, b);
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e);
+    double lag;
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 1.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    lag = w * 1.0 - cd_joint_q(m, d, b[0]);
+    cr_expect_lt(fabs(lag - Dw * w / Kw), 1e-8, "lag %.12g, D w / K %.12g", lag, Dw * w / Kw);
+    cr_expect_null(first_kind(d, CD_EV_CLUTCH, &n), "no clutch without a load");
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(gripper, torque_switch_brakes_the_inner_joint_and_drives_the_outer)
+{
+    /* TorqueSwitch, inner joint held: the clutch fires at thr / (K_w w); then
+     * the inner joint is braked at its switch angle (0) and the outer joint
+     * still follows the schedule: its torque is K_w (theta_s - q) - D_w qdot. */
+    int b[2], n;
+    double Kw = 20.0, thr = 0.05;
+    cd_model *m = finger_model(2, 1, CD_FINGER_TORQUE_SWITCH, thr, Kw, 0.0, 1.0, 0.0, b);
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e);
+    const cd_event *ev;
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 0.2, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    ev = first_kind(d, CD_EV_CLUTCH, &n);
+    cr_assert(ev);
+    cr_expect_eq(n, 1);
+    cr_expect_lt(fabs(ev->t - thr / Kw), 1e-9, "clutch at %.12g", ev->t);
+    cr_expect_eq(d->finger_brake[0], 0.0, "braked where it was");
+    cr_expect_lt(fabs(d->qfrc_actuator[m->body_dof[b[1]]] - Kw * (0.2 - cd_joint_q(m, d, b[1]))), 1e-12,
+                 "outer joint still coupled");
+    cr_expect_gt(cd_joint_q(m, d, b[1]), 0.1, "the outer joint closes on");
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(gripper, open_command_re_engages_without_chatter)
+{
+    /* The finger closes onto its stop at 0.5 rad; the clutch releases when
+     * K_w (theta_s - q) reaches 0.3 N m; equal pressure then holds it there.
+     * The schedule holds 1 rad until 10 s, then turns back to 0 at 20 s:
+     * the clutch re-engages once the schedule is back at the finger (theta_s
+     * = q ~ 0.5 rad, t ~ 15 s), once, and the finger opens back to 0. */
+    int b[1], n;
+    double Kw = 5.0, I = 1e-5 + 0.05 * 0.025 * 0.025, st[4] = {0, 1, 10, 20}, sq[4] = {0, 1, 1, 0};
+    cd_model *m = cd_model_create();
+    cd_link_desc l = cd_link_desc_default();
+    cd_finger_desc f = cd_finger_desc_default();
+    cd_joint_props p = cd_joint_props_default();
+    cd_error e;
+    cd_data *d;
+    long i;
+    const cd_event *last = NULL;
+    add_system(m, "palm", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.parent = 0; l.com[1] = 0.025; l.mass = 0.05;
+    memset(l.inertia, 0, sizeof l.inertia);
+    l.inertia[0] = l.inertia[4] = l.inertia[8] = 1e-5;
+    b[0] = cd_model_add_link(m, 0, &l, &e);
+    p.limited = 1; p.lower = -1; p.upper = 0.5;
+    cr_assert_eq(cd_model_set_joint(m, b[0], &p, &e), CD_OK, "%s", e.msg);
+    f.njoint = 1; f.joint_body = b; f.wire_K = Kw; f.wire_D = 2 * sqrt(Kw * I); f.threshold = 0.3;
+    f.grasp_torque = 0.01; f.sched_t = st; f.sched_q = sq; f.nsched = 4; f.open_at = 10.0;
+    cr_assert(cd_model_add_finger(m, &f, &e) == 0, "%s", e.msg);
+    m->opt.rtol = 1e-10; m->opt.atol = 1e-13; m->opt.h_max = 1e-2;
+    cr_assert_eq(cd_model_finalize(m, &e), CD_OK, "%s", e.msg);
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 22.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    first_kind(d, CD_EV_CLUTCH, &n);
+    cr_expect_eq(n, 2, "clutch events %d (release, re-engage)", n);
+    for (i = 0; i < d->ev_count; i++)
+        if (cd_data_event(d, i)->kind == CD_EV_CLUTCH) last = cd_data_event(d, i);
+    cr_assert(last);
+    cr_expect_eq(last->mode_to, CD_CLUTCH_ENGAGED);
+    cr_expect(last->t > 14.99 && last->t <= 15.0, "re-engaged at %.9g s", last->t);
+    cr_expect_lt(fabs(cd_joint_q(m, d, b[0])), 1e-6, "opened back to 0: %.3g", cd_joint_q(m, d, b[0]));
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+/* ---- grippers built from scenarios, and capture verdicts ------------------------ */
+#include <capdyn/io.h>
+#include <capdyn/verdict.h>
+#include <stdio.h>
+#include <stdlib.h>
+
+static cd_scenario *load_gripper(const char *const *sets, int nsets)
+{
+    char p[1024];
+    cd_error e;
+    cd_scenario *sc;
+    const char *r = getenv("CAPDYN_ROOT");
+    snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_space.toml", r ? r : ".");
+    sc = cd_scenario_load(p, sets, nsets, &e);
+    cr_assert(sc, "%s", e.msg);
+    return sc;
+}
+
+Test(gripper, soft_and_tako_split_the_motor_torque_quadratically)
+{
+    /* soft: one motor per finger; tako: one motor for every joint of every
+     * finger; both with the quadratic split (n - j)^2 from the tip: 4 : 1 for
+     * two links. Joint torque = ratio x motor torque, exactly (1e-12). */
+    const char *types[2] = {"gripper.type=\"soft\"", "gripper.type=\"tako\""};
+    int k;
+    for (k = 0; k < 2; k++) {
+        const char *sets[1] = {types[k]};
+        cd_scenario *sc;
+        cd_error e;
+        cd_data *d;
+        const cd_model *m;
+        int f, j;
+        char p[1024];
+        const char *r = getenv("CAPDYN_ROOT");
+        snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_tako.toml", r ? r : ".");
+        sc = cd_scenario_load(p, sets, 1, &e);
+        cr_assert(sc, "%s", e.msg);
+        m = sc->model;
+        cr_expect_eq(m->nu, k == 0 ? 2 : 1, "%s: motors %d", types[k], m->nu);
+        cr_expect_eq(m->nfinger, 0);
+        d = cd_data_create(m, 0, &e);
+        cr_assert(d, "%s", e.msg);
+        for (f = 0; f < 2; f++)
+            for (j = 0; j < 2; j++) {
+                char nm[64];
+                int b;
+                snprintf(nm, sizeof nm, "hand/f%d_l%d", f, j);
+                b = cd_model_body_id(m, nm);
+                cr_assert(b > 0, "%s", nm);
+                cr_expect_lt(fabs(d->qfrc_actuator[m->body_dof[b]] - (j == 0 ? 4.0 : 1.0) * 0.05), 1e-12,
+                             "%s %s: %.17g", types[k], nm, d->qfrc_actuator[m->body_dof[b]]);
+            }
+        cd_data_free(d);
+        cd_scenario_free(sc);
+    }
+}
+
+/* runs the scenario sampling every output_dt, as capdyn run does */
+static cd_monitor run_verdict(cd_scenario *sc, double t_end)
+{
+    cd_monitor mo;
+    cd_monitor_opts op = cd_monitor_opts_default();
+    cd_error e;
+    cd_data *d = cd_data_create(sc->model, 0, &e);
+    double t;
+    int i, n;
+    cr_assert(d, "%s", e.msg);
+    cr_assert(sc->capture_hand >= 0 && sc->capture_object >= 0, "hand %d object %d", sc->capture_hand, sc->capture_object);
+    op.hand = sc->capture_hand;
+    op.object = sc->capture_object;
+    op.v_max = sc->capture_v_max; op.w_max = sc->capture_w_max; op.dwell = sc->capture_dwell; op.workspace = sc->capture_workspace;
+    cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
+    n = (int)ceil(t_end / sc->output_dt - 1e-9);
+    for (i = 1; i <= n; i++) {
+        t = i == n ? t_end : i * sc->output_dt;
+        cr_assert_eq(cd_sim_advance(sc->model, d, t, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cd_monitor_update(&mo, sc->model, d);
+    }
+    cd_data_free(d);
+    return mo;
+}
+
+Test(gripper, verdicts_captured_escaped_unresolved)
+{
+    /* centred cylinder: captured (enclosed, at rest relative to the palm,
+     * fingers stopped, contacts unchanged for 0.2 s); the same cylinder
+     * thrown out of the hand at 2 m/s: escaped; the centred one stopped at
+     * 50 ms, before the fingers reach it: unresolved. */
+    const char *thrown[1] = {"target[0].velocity=[0.0, 2.0, 0.0]"};
+    cd_scenario *sc = load_gripper(NULL, 0);
+    cd_monitor mo = run_verdict(sc, 1.0);
+    cr_log_info("captured at %.4g s: peak fn %.4g N, peak tau %.4g N m, %d stick %d slip, offset %.4g m", mo.t_capture,
+                mo.peak_fn, mo.peak_tau, mo.n_stick, mo.n_slip, mo.offset_norm);
+    cr_expect_eq(mo.verdict, CD_VERDICT_CAPTURED, "verdict %s", cd_verdict_name(mo.verdict));
+    cr_expect(mo.enclosed && mo.n_stick + mo.n_slip >= 2, "enclosed, held by >= 2 contacts (%d)", mo.n_stick + mo.n_slip);
+    cr_expect_lt(mo.v_rel, 1e-3);
+    cd_scenario_free(sc);
+    sc = load_gripper(thrown, 1);
+    mo = run_verdict(sc, 0.5);
+    cr_expect_eq(mo.verdict, CD_VERDICT_ESCAPED, "verdict %s", cd_verdict_name(mo.verdict));
+    cr_expect_gt(mo.offset_norm, mo.opt.workspace);
+    cd_scenario_free(sc);
+    sc = load_gripper(NULL, 0);
+    mo = run_verdict(sc, 0.05);
+    cr_expect_eq(mo.verdict, CD_VERDICT_UNRESOLVED, "verdict %s", cd_verdict_name(mo.verdict));
+    cd_scenario_free(sc);
+}
