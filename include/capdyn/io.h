@@ -34,6 +34,7 @@ typedef struct {
     int capture_hand;      /* system of the [gripper]'s hand, -1 if none */
     int capture_object;    /* the object it is to capture ([capture] object, or the first [[target]]), -1 */
     double capture_v_max, capture_w_max, capture_dwell, capture_workspace; /* [capture] (verdict.h) */
+    int capture_feature;   /* [capture] feature: the shape tested for enclosure, -1 = the object's CoM */
 } cd_scenario;
 
 /* Loads, validates and builds a scenario. overrides are "key.path=value"

@@ -1,7 +1,8 @@
 /* capdyn: capture verdicts and figures of merit of a grasp or a capture run
  * (issue 8; docs/grippers.md). A monitor watches a run sample by sample and
  * decides, from the physics only:
- *   captured    the object is enclosed by the hand (its centre of mass inside
+ *   captured    the object is enclosed by the hand (its centre of mass, or the
+ *               centre of its grasp feature, inside
  *               the polygon of the palm face and the fingers, in the fingers'
  *               plane), its velocity relative to the palm has decayed below
  *               v_max and w_max, the fingers have stopped (every hand joint
@@ -35,6 +36,8 @@ typedef struct {
     double dwell;         /* [s] the contact set must hold this long, default 0.2 */
     double workspace;     /* [m] escape radius about the palm centre; 0 = 1.5 x (palm half-diagonal
                              + the longest finger's reach), computed at init */
+    int feature;          /* shape of the object that is to be grasped (a handrail's bar): its
+                             centre is the point tested for enclosure; -1 = the object's CoM */
 } cd_monitor_opts;
 
 /* Defaults above, hand and object -1 (must be set). */
@@ -50,6 +53,7 @@ typedef struct {
     int n_stick, n_slip;  /* object contacts at the end */
     double offset[3];     /* [m] object CoM - palm centre at the end, palm frame */
     double offset_norm;
+    double point[3];      /* the point tested for enclosure (feature centre or CoM), palm frame, at the end [m] */
     int enclosed;         /* at the last sample */
     double v_rel, w_rel;  /* at the last sample */
     double qd_max;        /* largest hand joint rate at the last sample [rad/s | m/s] */
@@ -66,6 +70,14 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
 /* Looks at the current state (after an evaluation); call it at every
  * sample or accepted step. A verdict, once reached, is kept. */
 void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d);
+
+/* The Ferrari-Canny epsilon of the object's closed contacts at the current
+ * state (analysis.h): contact points and inward normals from the slots, mu
+ * from each slot's law (mu_max), about the object's CoM; planar in the
+ * fingers' plane when every finger turns about parallel axes, else 3-D.
+ * *eps = 0 and *closure = 0 without force closure. Status of the analysis. */
+cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_data *d, double *eps, int *closure,
+                             cd_error *err);
 
 #ifdef __cplusplus
 }

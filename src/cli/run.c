@@ -354,6 +354,7 @@ int cmd_run(int argc, char **argv)
         mop.w_max = sc->capture_w_max;
         mop.dwell = sc->capture_dwell;
         mop.workspace = sc->capture_workspace;
+        mop.feature = sc->capture_feature;
         if (cd_monitor_init(&mon, m, d, &mop, &err) != CD_OK) {
             cli_error("%s", err.msg);
             have_mon = 0;
@@ -435,6 +436,18 @@ int cmd_run(int argc, char **argv)
                        "(%d stick, %d slip), offset from the palm %.6g m, %s, relative speed %.3g m/s, %.3g rad/s\n",
                        mon.peak_fn, mon.peak_tau, mon.n_stick + mon.n_slip, mon.n_stick, mon.n_slip, mon.offset_norm,
                        mon.enclosed ? "enclosed" : "not enclosed", mon.v_rel, mon.w_rel);
+                printf("            point tested for enclosure (palm frame): (%.4g, %.4g, %.4g) m\n", mon.point[0],
+                       mon.point[1], mon.point[2]);
+                {
+                    double eps;
+                    int fc;
+                    cd_error qerr;
+                    if (cd_monitor_quality(&mon, m, d, &eps, &fc, &qerr) == CD_OK)
+                        printf("            grasp quality (Ferrari-Canny epsilon, final contacts): %.4g%s\n", eps,
+                               fc ? "" : " (no force closure)");
+                    else
+                        printf("            grasp quality: not computed (%s)\n", qerr.msg);
+                }
             }
         } else {
             cli_error("reading back '%s': %s", out, rerr.msg);

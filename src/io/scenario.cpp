@@ -1216,7 +1216,8 @@ struct Builder {
     void shape(Node &node, const std::string &path, SysInfo &s, int body, const char *default_name)
     {
         Tab t(&node, path,
-              {"name", "type", "position", "rpy_deg", "quaternion", "normal", "radius", "length", "size", "vertices"});
+              {"name", "type", "position", "rpy_deg", "quaternion", "normal", "radius", "length", "size", "vertices",
+               "height", "post"});
         std::string name;
         if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
         else if (default_name) name = default_name;
@@ -1224,8 +1225,9 @@ struct Builder {
         if (s.shape_at.count(name))
             fail_at(t.get("name") ? t.get("name")->val->loc : node.loc, t.kp("name"),
                     "expected a shape name unique in system '" + s.name + "', got '" + name + "' twice");
-        std::vector<std::string> types = {"plane", "sphere", "box", "cylinder", "capsule", "convex"};
+        std::vector<std::string> types = {"plane", "sphere", "box", "cylinder", "capsule", "convex", "handrail"};
         std::string ty = choice_of(t.need("type", "one of " + list(types)), t.kp("type"), types);
+        if (ty == "handrail") { handrail(t, node, path, s, body, name); return; }
         int type = cd_shape_type_from_name(ty.c_str());
         /* which size keys apply to which type */
         std::vector<std::string> takes;
@@ -1234,7 +1236,7 @@ struct Builder {
         else if (ty == "box") takes = {"size"};
         else if (ty == "cylinder" || ty == "capsule") takes = {"radius", "length"};
         else takes = {"vertices"};
-        for (const char *k : {"normal", "radius", "length", "size", "vertices"})
+        for (const char *k : {"normal", "radius", "length", "size", "vertices", "height", "post"})
             if (Entry *e = t.get(k))
                 if (std::find(takes.begin(), takes.end(), k) == takes.end())
                     fail_at(e->kloc, t.kp(k), "does not apply to a " + ty + " shape (it takes: " + list(takes) + ")");
@@ -1283,6 +1285,42 @@ struct Builder {
         if (id < 0) builder_fail(node.loc, path);
         s.shape_at.emplace(name, s.shapes.size());
         s.shapes.push_back({name, id});
+    }
+
+    /* A handrail fixture (ISS-era EVA handrail): a round bar of `radius` and
+     * `length` along the shape's x axis, `height` above its base plane z = 0,
+     * on two square posts of side `post` (default 2 radius) at its ends.
+     * Three shapes: NAME_bar (capsule), NAME_post0, NAME_post1 (boxes). */
+    void handrail(const Tab &t, Node &node, const std::string &path, SysInfo &s, int body, const std::string &name)
+    {
+        for (const char *k : {"normal", "size", "vertices"})
+            if (Entry *e = t.get(k)) fail_at(e->kloc, t.kp(k), "does not apply to a handrail shape (it takes: 'radius', 'length', 'height', 'post')");
+        double pos[3] = {0, 0, 0}, R[9];
+        t.vec("position", 3, pos);
+        rotation_of(t, R, "normal");
+        double r = t.need_num("radius", Range::Pos), L = t.need_num("length", Range::Pos), h = t.need_num("height", Range::Pos);
+        double w = t.num("post", 2 * r, Range::Pos);
+        if (!(L > 2 * w)) fail_at(t.get("length")->val->loc, t.kp("length"), "expected a handrail longer than its two posts (" + fmt_num(2 * w) + " m), got " + fmt_num(L));
+        if (!(h > r)) fail_at(t.get("height")->val->loc, t.kp("height"), "expected the bar's height above its base > its radius " + fmt_num(r) + ", got " + fmt_num(h));
+        struct Part { const char *suffix; cd_shape_type type; double p[3]; double rpy[3]; double sz[3]; };
+        Part parts[3] = {
+            {"_bar", CD_SHAPE_CAPSULE, {0, 0, h}, {0, M_PI / 2, 0}, {r, L / 2 - r, 0}},
+            {"_post0", CD_SHAPE_BOX, {-(L / 2 - w / 2), 0, h / 2}, {0, 0, 0}, {w / 2, w / 2, h / 2}},
+            {"_post1", CD_SHAPE_BOX, {L / 2 - w / 2, 0, h / 2}, {0, 0, 0}, {w / 2, w / 2, h / 2}}};
+        for (const Part &pt : parts) {
+            double Rl[9], Rw[9], pl[3], pw[3];
+            std::string nm = name + pt.suffix;
+            if (s.shape_at.count(nm)) fail_at(node.loc, t.kp("name"), "expected shape names unique in system '" + s.name + "', got '" + nm + "' twice");
+            cd_m3_from_rpy(Rl, pt.rpy[0], pt.rpy[1], pt.rpy[2]);
+            cd_m3_mul(Rw, R, Rl);
+            for (int k = 0; k < 3; k++) pl[k] = pt.p[k];
+            cd_m3_mulv(pw, R, pl);
+            cd_v3_add(pw, pw, pos);
+            int id = cd_model_add_shape(m.get(), body, pt.type, pw, Rw, pt.sz, nullptr, 0, &err);
+            if (id < 0) builder_fail(node.loc, path);
+            s.shape_at.emplace(nm, s.shapes.size());
+            s.shapes.push_back({nm, id});
+        }
     }
 
     void shapes(const Tab &t, SysInfo &s, int body)
@@ -1750,9 +1788,22 @@ struct Builder {
                 if (cd_model_add_finger(m.get(), &fd, &err) < 0) builder_fail(t.n->loc, t.path);
             }
         }
-        /* pairs: the hand's check points against every target shape */
+        /* pairs: the hand's check points against every target shape, and each
+         * finger's check points against the other fingers' links (fingers that
+         * wrap past each other touch: they must not pass through) */
         int lid = cd_model_add_law(m.get(), &def.law, &err);
         if (lid < 0) builder_fail(t.n->loc, t.path);
+        for (int f = 0; f < nf; f++)
+            for (int g = 0; g < nf; g++) {
+                if (g == f) continue;
+                for (int b : fingers[f])
+                    for (int c : fingers[g]) {
+                        int shp = -1;
+                        for (int k = 0; k < m->nshape; k++)
+                            if (m->shape_body[k] == c) shp = k;
+                        if (shp >= 0 && cd_model_add_pair(m.get(), S.id, b, shp, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+                    }
+            }
         for (auto &s2 : sys) {
             if (!s2.is_target) continue;
             for (auto &sh : s2.shapes)
@@ -1827,8 +1878,13 @@ struct Builder {
         checkpoints(t, S, S.bodies[0]);
         if (is_target) {
             Entry *e = t.get("shape");
-            if (!e) t.need("shape", "a table {type = ..., sizes}");
-            shape(*table_of(*e->val, t.kp("shape")), t.kp("shape"), S, S.bodies[0].id, "shape");
+            if (!e) t.need("shape", "a table {type = ..., sizes}, or an array of them");
+            if (e->val->kind == NK::Array) { /* a composite object: several shapes, each named */
+                auto v = tables_of(*e->val, t.kp("shape"), "shape = [{...}, ...]");
+                for (size_t i = 0; i < v.size(); i++) shape(*v[i], idx(t.kp("shape"), i), S, S.bodies[0].id, nullptr);
+            } else {
+                shape(*table_of(*e->val, t.kp("shape")), t.kp("shape"), S, S.bodies[0].id, "shape");
+            }
         } else {
             shapes(t, S, S.bodies[0].id);
             if (Entry *e = t.get("link")) {
@@ -1959,7 +2015,7 @@ struct Builder {
         std::string title;
         double duration = 0, output_dt = 0, flush_every = 1.0;
         int event_capacity = 4096;
-        int hand = -1, object = -1;
+        int hand = -1, object = -1, feature = -1;
         double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
         double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
     };
@@ -2125,7 +2181,7 @@ struct Builder {
         for (auto &s2 : sys)
             if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
         if (Entry *e = top.get("capture")) {
-            Tab t(table_of(*e->val, "capture"), "capture", {"object", "v_max", "w_max", "dwell", "workspace"});
+            Tab t(table_of(*e->val, "capture"), "capture", {"object", "feature", "v_max", "w_max", "dwell", "workspace"});
             if (Entry *o = t.get("object")) {
                 std::string on = str_of(*o->val, t.kp("object"));
                 SysInfo *os = find_sys(on);
@@ -2133,6 +2189,17 @@ struct Builder {
                 if (m->sys_base_type[os->id] != CD_BASE_FREE)
                     fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
                 run.object = os->id;
+            }
+            if (Entry *f = t.get("feature")) {
+                std::string fn = str_of(*f->val, t.kp("feature"));
+                SysInfo *os = run.object >= 0 ? &sys[0] : nullptr;
+                for (auto &s2 : sys)
+                    if (s2.id == run.object) os = &s2;
+                if (!os || !os->shape_at.count(fn))
+                    fail_at(f->val->loc, t.kp("feature"), "expected the name of a shape of the object" +
+                                                             (os ? " '" + os->name + "'" + hint(fn, os->shape_names()) : std::string()) +
+                                                             ", got '" + fn + "'");
+                run.feature = os->shapes[os->shape_at[fn]].second;
             }
             run.v_max = t.num("v_max", run.v_max, Range::Pos);
             run.w_max = t.num("w_max", run.w_max, Range::Pos);
@@ -2254,6 +2321,7 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->capture_w_max = run.w_max;
     sc->capture_dwell = run.dwell;
     sc->capture_workspace = run.workspace;
+    sc->capture_feature = run.feature;
     sc->max_wall_time = run.max_wall_time;
     sc->max_rhs_evals = run.max_rhs_evals;
     sc->min_steps = run.min_steps;

@@ -9,6 +9,7 @@
  * above the palm face, below the highest finger point, and on the inner side
  * of every finger (the side its joint axis closes toward). */
 #include "capdyn/verdict.h"
+#include "capdyn/analysis.h"
 #include "../math/cd_math.h"
 
 #include <math.h>
@@ -31,6 +32,7 @@ cd_monitor_opts cd_monitor_opts_default(void)
     o.w_max = 0.05;
     o.dwell = 0.2;
     o.workspace = 0;
+    o.feature = -1;
     return o;
 }
 
@@ -169,6 +171,10 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
                      mo->opt.object);
         return CD_EINVAL;
     }
+    if (mo->opt.feature >= m->nshape || (mo->opt.feature >= 0 && m->body_sys[m->shape_body[mo->opt.feature]] != mo->opt.object)) {
+        cd_error_set(err, CD_EINVAL, "verdict: the grasp feature (shape %d) is not a shape of the object", mo->opt.feature);
+        return CD_EINVAL;
+    }
     if (m->sys_base_type[mo->opt.object] != CD_BASE_FREE) {
         cd_error_set(err, CD_EINVAL, "verdict: the object '%s' must be free-floating", m->sys_name[mo->opt.object]);
         return CD_EINVAL;
@@ -232,7 +238,15 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
     cd_v3_sub(wrel, d->body_w + 3 * ob, d->body_w + 3 * hb);
     mo->v_rel = cd_v3_norm(vp);
     mo->w_rel = cd_v3_norm(wrel);
+    if (mo->opt.feature >= 0) { /* the feature's centre, world */
+        int sb = m->shape_body[mo->opt.feature];
+        double t[3];
+        cd_m3_mulv(t, d->body_R + 9 * sb, m->shape_pos + 3 * mo->opt.feature);
+        cd_v3_add(c, d->body_x + 3 * sb, t);
+    }
     mo->enclosed = enclosed(m, d, hand, c);
+    cd_v3_sub(t3, c, d->body_x + 3 * hb);
+    cd_m3_tmulv(mo->point, d->body_R + 9 * hb, t3);
     if (mo->verdict != CD_VERDICT_UNRESOLVED) return;
     if (mo->offset_norm > mo->opt.workspace) {
         mo->verdict = CD_VERDICT_ESCAPED;
@@ -244,4 +258,44 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
         mo->verdict = CD_VERDICT_CAPTURED;
         mo->t_capture = d->t;
     }
+}
+
+cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_data *d, double *eps, int *closure,
+                             cd_error *err)
+{
+    enum { MAXC = 256 };
+    cd_grasp_contact ct[MAXC];
+    cd_grasp_options op = cd_grasp_options_default();
+    cd_grasp_quality q;
+    int k, n = 0, first[MAXF], nf = fingers(m, mo->opt.hand, first), f, parallel = nf >= 2, obj = mo->opt.object;
+    cd_status st;
+    *eps = 0;
+    *closure = 0;
+    for (k = 0; k < m->nslot && n < MAXC; k++) {
+        int a = m->cp_body[m->slot_cp[k]], s = m->shape_body[m->slot_shape[k]], i;
+        double sign;
+        if (d->slot_mode[k] == CD_MODE_OPEN) continue;
+        if (m->body_sys[s] == obj) sign = -1.0;      /* the normal points from the object's shape out */
+        else if (m->body_sys[a] == obj) sign = 1.0;  /* the check point is the object's: into it */
+        else continue;
+        for (i = 0; i < 3; i++) {
+            ct[n].p[i] = d->slot_point[3 * k + i];
+            ct[n].n[i] = sign * d->slot_normal[3 * k + i];
+            ct[n].t[i] = 0.0;
+        }
+        ct[n].mu = m->law[m->slot_law[k]].mu_s;
+        n++;
+    }
+    if (n == 0) return CD_OK;
+    for (f = 1; f < nf; f++)
+        if (fabs(fabs(cd_v3_dot(d->body_axisw + 3 * first[0], d->body_axisw + 3 * first[f])) - 1.0) > 1e-6) parallel = 0;
+    if (parallel) {
+        op.mode = CD_GRASP_PLANAR;
+        cd_v3_copy(op.plane_normal, d->body_axisw + 3 * first[0]);
+    }
+    st = cd_grasp_quality_eval(ct, n, d->body_c + 3 * m->sys_body_adr[obj], &op, &q, err);
+    if (st != CD_OK) return st;
+    *eps = q.epsilon;
+    *closure = q.force_closure;
+    return CD_OK;
 }

@@ -47,9 +47,12 @@ int cd_schedule_piece(const cd_model *m, int a, double t)
 /* law of actuator a, schedules by the row in d->act_piece */
 static double law(const cd_model *m, const cd_data *d, int a, double q, double qd)
 {
-    const double *p = m->act_prm + 4 * a;
-    const double *tt = m->tbl_t + m->act_tbl_adr[a], *vv = m->tbl_v + m->act_tbl_adr[a];
+    const double *p = m->act_prm + 4 * a, *tt = NULL, *vv = NULL;
     int n = m->act_tbl_n[a], k = d->act_piece[a];
+    if (n > 0) { /* (no pointer arithmetic on the tables of a model that has none) */
+        tt = m->tbl_t + m->act_tbl_adr[a];
+        vv = m->tbl_v + m->act_tbl_adr[a];
+    }
     switch (m->act_type[a]) {
     case CD_ACT_CONSTANT: return p[0];
     case CD_ACT_PD: return p[0] + p[1] * (p[3] - q) - p[2] * qd;
