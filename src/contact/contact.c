@@ -273,8 +273,27 @@ int cd_contact_transition(const cd_model *m, cd_data *d, int k, int forgive, cd_
         else any_tangent(s, n);
     } else if (g[1] < 0 && from == CD_MODE_SLIP) {
         const double *vs = d->slot_va + 3 * k;
-        double nv = cd_v3_norm(vs);
-        if (nv > 100.0 * d->opt.v_reg) {
+        double nv = cd_v3_norm(vs), st[3], perp[3];
+        /* the slip velocity's part across the anchored direction: a 3-D slip
+         * that turned past 90 deg at speed still has it; a slip that merely
+         * reversed along the direction (it stopped, or the friction cone grew
+         * faster than the contact point moves, so the spring left the cone)
+         * has none and sticks. (Re-anchoring a reversal along the direction
+         * would flip the anchor back and forth at one instant.) */
+        tangential(st, d->slot_dir + 3 * k, n);
+        cd_v3_normalize(st);
+        cd_v3_copy(perp, vs);
+        cd_v3_axpy(perp, -cd_v3_dot(vs, st), st);
+        {
+            /* the cone's growth rate zrate (v_a = v_t - zrate s_t), and the slip
+             * function after a re-anchoring to s' = v_a/|v_a|: it must be
+             * positive, else no slip direction is consistent (the cone grows
+             * faster than the point slips) and the contact sticks */
+            double zrate = cd_v3_dot(vt, st) - cd_v3_dot(vs, st), g_new = -1.0;
+            if (nv > 0) g_new = cd_v3_dot(vt, vs) / nv - zrate + d->opt.v_reg;
+            if (!(g_new > 0)) cd_v3_zero(perp);
+        }
+        if (cd_v3_norm(perp) > 100.0 * d->opt.v_reg) {
             /* 3-D slip that turned past 90 deg at speed: re-anchor, keep slipping */
             kind = CD_EV_SLIP_TURN;
             cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);
