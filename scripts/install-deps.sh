@@ -5,7 +5,7 @@
 set -euo pipefail
 
 pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
-      libtomlplusplus-dev libcriterion-dev gnuplot-nox)
+      libtomlplusplus-dev libcriterion-dev gnuplot-nox strace)
 
 missing=()
 for p in "${pkgs[@]}"; do
