@@ -4,8 +4,10 @@
 # (SIGKILL through strace's fault injection) at that write, and checks
 # after each kill that every committed sample reads back bit-identical to
 # the uninterrupted run. Prints "kill points N (killed K), intact M".
+# The run commits when 1024 rows are pending and at its close (flush_every
+# 1e9 s), so that every run makes the same writes.
 # Usage: bench/killpoints.sh [SCENARIO.toml, relative to scenarios/]
-# (default paper_fig5_envelope_grasp.toml; about 13 minutes for it).
+# (default paper_fig5_envelope_grasp.toml; about 15 minutes for it).
 set -euo pipefail
 cd "$(dirname "$0")/.."
 make --no-print-directory build/capdyn_tests build/capdyn >/dev/null

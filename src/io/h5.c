@@ -1088,14 +1088,14 @@ static int claim_output(const char *path, const cd_scenario *sc, out_claim *c, c
     strcpy(bcopy, c->target);
     dir = dirname(dcopy);
     base = basename(bcopy);
-    c->dir_fd = open(dir, O_RDONLY | O_DIRECTORY);
+    c->dir_fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
     if (c->dir_fd < 0) {
         seterr(err, CD_EIO, "cannot create results file '%s': %s", path, strerror(errno));
         goto fail;
     }
     (void)flock(c->dir_fd, LOCK_EX); /* best effort: not every file system has it */
     if (exists) {
-        int fd = open(c->target, O_RDONLY | O_NOCTTY);
+        int fd = open(c->target, O_RDONLY | O_NOCTTY | O_CLOEXEC);
         if (fd >= 0) {
             int busy = flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
             close(fd); /* drops the probe's lock */
@@ -1112,7 +1112,7 @@ static int claim_output(const char *path, const cd_scenario *sc, out_claim *c, c
     if (!c->tmp) goto nomem;
     for (i = 0; i < 100; i++) {
         sprintf(c->tmp, "%s/.%s.tmp-%ld-%d", dir, base, (long)getpid(), i);
-        c->lock_fd = open(c->tmp, O_RDWR | O_CREAT | O_EXCL | O_NOCTTY, 0666);
+        c->lock_fd = open(c->tmp, O_RDWR | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0666);
         if (c->lock_fd >= 0 || errno != EEXIST) break;
     }
     if (c->lock_fd < 0) {
