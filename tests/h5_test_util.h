@@ -7,6 +7,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* An integer attribute of obj. */
 static inline long long attr_ll(hid_t obj, const char *name)
@@ -48,6 +49,16 @@ static inline void attr_s(hid_t obj, const char *name, char *out, size_t n)
     H5Tclose(mt);
     H5Tclose(t);
     H5Aclose(a);
+}
+
+/* The file's run_status is status and its run_message contains part. */
+static inline void expect_run_status(hid_t f, const char *status, const char *part)
+{
+    char s[1100];
+    attr_s(f, "run_status", s, sizeof s);
+    cr_expect_str_eq(s, status);
+    attr_s(f, "run_message", s, sizeof s);
+    cr_expect(strstr(s, part) != NULL, "run_message '%s' names '%s'", s, part);
 }
 
 /* Dimensions of a dataset; returns its rank. */

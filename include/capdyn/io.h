@@ -50,12 +50,21 @@ void cd_scenario_free(cd_scenario *sc);
 /* ---- HDF5 results --------------------------------------------------------- */
 typedef struct cd_h5_writer cd_h5_writer;
 
-/* Creates (truncates) path and writes the static description (model layout,
- * names, attributes: scenario text, capdyn version, creation time). Fails
- * with CD_EIO before any simulation if the file cannot be created. */
+/* Creates the results file path and writes the static description (model
+ * layout, names, attributes: scenario text, capdyn version, creation time).
+ * The file is written under a temporary name in path's directory and
+ * renamed onto path once that is on disk, so an existing file is never
+ * truncated, only replaced by a readable one (a symbolic link is followed);
+ * the writer then holds an exclusive flock on it until cd_h5_close. Fails
+ * with CD_EIO before any simulation if the file cannot be created, if path
+ * is sc->path itself (same device and inode, so also through a link), is
+ * not a regular file, or is locked by another writer (docs/reliability.md,
+ * "Results files"). */
 cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err);
 /* Appends one sample of d (time, system states, slot outputs, diagnostics)
- * and any events logged since the last call. */
+ * and any events logged since the last call. Returns CD_ENUMERIC, with err
+ * naming the dataset, element, value and time, if a value of the sample is
+ * not finite (the sample is kept), CD_EIO if a commit failed. */
 cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_error *err);
 /* Flushes to disk and commits the sample counter (readers trust only that). */
 cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err);

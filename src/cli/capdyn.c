@@ -19,8 +19,12 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdlib.h>
+#include <signal.h>
 #include <string.h>
+#include <sys/types.h>
+#include <sys/wait.h>
 #include <time.h>
+#include <unistd.h>
 
 static const char *top_help =
     "usage: capdyn COMMAND [ARGS...]\n"
@@ -116,6 +120,66 @@ double cli_wall(void)
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
 }
 
+/* Reading a results file (info, export) in a child process
+ * (docs/reliability.md, "Untrusted results files"). The reader checks
+ * every size and index it takes from a file, but libhdf5 1.10 itself can
+ * crash on a damaged file (measured: a flipped bit in an attribute's size
+ * field). The child writes its stdout into a temporary file; the parent
+ * copies it out only if the child exited (with its status), so a crash
+ * becomes one error line and exit status 1, with nothing half printed.
+ * CAPDYN_NO_ISOLATION=1 reads in this process (for debuggers). */
+static int isolated(int (*fn)(int, char **), int argc, char **argv)
+{
+    const char *path = NULL;
+    FILE *tmp;
+    pid_t pid;
+    int st, i;
+    char buf[65536];
+    size_t n;
+    for (i = 1; i < argc && !path; i++)
+        if (argv[i][0] != '-') path = argv[i];
+    if (!path || getenv("CAPDYN_NO_ISOLATION")) return fn(argc, argv);
+    fflush(NULL);
+    tmp = tmpfile();
+    if (!tmp) return fn(argc, argv);
+    pid = fork();
+    if (pid < 0) {
+        fclose(tmp);
+        return fn(argc, argv);
+    }
+    if (pid == 0) {
+        int rc = CLI_FAIL;
+        if (dup2(fileno(tmp), STDOUT_FILENO) >= 0) rc = fn(argc, argv);
+        if (fflush(stdout) != 0 && rc == CLI_OK) {
+            cli_error("writing the output failed");
+            rc = CLI_FAIL;
+        }
+        exit(rc);
+    }
+    while (waitpid(pid, &st, 0) < 0)
+        if (errno != EINTR) {
+            fclose(tmp);
+            cli_error("waiting for the reading process failed: %s", strerror(errno));
+            return CLI_FAIL;
+        }
+    if (!WIFEXITED(st)) {
+        fclose(tmp);
+        cli_error("'%s': reading the file crashed inside the HDF5 library (%s): the file is damaged; nothing was "
+                  "printed",
+                  path, WIFSIGNALED(st) ? strsignal(WTERMSIG(st)) : "stopped");
+        return CLI_FAIL;
+    }
+    rewind(tmp);
+    while ((n = fread(buf, 1, sizeof buf, tmp)) > 0)
+        if (fwrite(buf, 1, n, stdout) != n) break;
+    fclose(tmp);
+    if (fflush(stdout) != 0) {
+        cli_error("writing the output failed");
+        return CLI_FAIL;
+    }
+    return WEXITSTATUS(st);
+}
+
 int main(int argc, char **argv)
 {
     const char *cmd;
@@ -159,8 +223,8 @@ int main(int argc, char **argv)
     }
     if (!strcmp(cmd, "run")) return cmd_run(argc - 1, argv + 1);
     if (!strcmp(cmd, "check")) return cmd_check(argc - 1, argv + 1);
-    if (!strcmp(cmd, "info")) return cmd_info(argc - 1, argv + 1);
-    if (!strcmp(cmd, "export")) return cmd_export(argc - 1, argv + 1);
+    if (!strcmp(cmd, "info")) return isolated(cmd_info, argc - 1, argv + 1);
+    if (!strcmp(cmd, "export")) return isolated(cmd_export, argc - 1, argv + 1);
     if (cmd[0] == '-') return cli_usage(NULL, "unknown option '%s'", cmd);
     return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export)", cmd);
 }

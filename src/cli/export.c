@@ -69,6 +69,7 @@ typedef struct {
     long *sel;   /* selected sample indices */
     long nsel;
     double *t;
+    int nerr;             /* errors reported: only the first is printed (one error line) */
 } exp_ctx;
 
 static void num(double v, int prec)
@@ -93,7 +94,7 @@ static double *series(exp_ctx *c, const char *path)
 {
     cd_error err;
     double *v = cd_h5r_series(c->r, path, NULL, &err);
-    if (!v) cli_error("%s", err.msg);
+    if (!v && c->nerr++ == 0) cli_error("%s", err.msg); /* the first failure names the file's fault */
     return v;
 }
 

@@ -79,7 +79,7 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
     /* identity */
     print_wrapped_kv(out, "title", title ? title : "");
     snprintf(line, sizeof line, "%s (capdyn %s, created %s%s%s)", path, ver ? ver : "?", created ? created : "?",
-             closed ? ", closed " : "", closed ? closed : "");
+             closed && *closed ? ", closed " : "", closed && *closed ? closed : "");
     print_wrapped_kv(out, "file", line);
     snprintf(line, sizeof line, "%s (%lu bytes of text stored)", spath && *spath ? spath : "(built by code)",
              (unsigned long)(stext ? strlen(stext) : 0));
@@ -190,7 +190,10 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
     {
         long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0;
         double rtol = 0, atol = 0, hmin = 0, hmax = 0;
-        int final = cd_h5r_attr_i64(r, "/", "stats_nsteps", &ns) == 0;
+        /* the closing statistics exist from the start (placeholders): final
+         * once the run wrote its status */
+        int final = status && strcmp(status, "running") != 0 && cd_h5r_attr_i64(r, "/", "stats_nsteps", &ns) == 0 &&
+                    ns >= 0;
         cd_h5r_attr_f64(r, "/", "rtol", &rtol);
         cd_h5r_attr_f64(r, "/", "atol", &atol);
         if (final) {

@@ -24,8 +24,11 @@ static const char *run_help =
     "\n"
     "options:\n"
     "  -o, --output FILE   results file (default: the scenario's base name with\n"
-    "                      .h5, in the current directory); created or truncated\n"
-    "                      before the run, which does not start if it cannot be\n"
+    "                      .h5, in the current directory); written under a\n"
+    "                      temporary name in its directory and renamed onto FILE\n"
+    "                      once its layout is written, before the run, which does\n"
+    "                      not start if that fails, if FILE is the scenario or\n"
+    "                      another run is writing FILE\n"
     "  --set KEY=VALUE     override a scenario value (TOML syntax), repeatable,\n"
     "                      e.g. --set simulation.duration=0.5\n"
     "  -q, --quiet         no progress bar and no summary (errors still shown)\n"
@@ -381,9 +384,10 @@ int cmd_run(int argc, char **argv)
         st = cd_sim_advance(m, d, tn, step_cb, &ctx, &err);
         if (st != CD_OK) break;
         st = cd_h5_append(w, m, d, &werr);
+        /* a sample with a non-finite value is kept in the file (CD_ENUMERIC) */
+        if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
         if (st != CD_OK) { err = werr; break; }
         if (have_mon) cd_monitor_update(&mon, m, d);
-        t_last_sample = d->t;
         if (cli_wall() - last_flush >= sc->flush_every) {
             st = cd_h5_flush(w, &werr);
             if (st != CD_OK) { err = werr; break; }

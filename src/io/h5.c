@@ -1,21 +1,51 @@
 /* HDF5 results writer (include/capdyn/io.h; layout in docs/results-format.md).
  *
- * Crash safety. HDF5 1.10 has no journal: a file whose writer dies between
- * two H5Fflush calls may be unreadable (measured here: 8/8 files killed with
- * SIGKILL without flushing were unreadable, 8/8 readable with H5Fflush). So
- * the writer touches the file ONLY inside a commit: samples and events are
- * buffered in memory by cd_h5_append, and a commit (cd_h5_flush, or a full
- * buffer) writes every pending row, flushes, then writes the counters
- * /committed_events and /committed_samples (the latter last) and flushes
- * again. Between commits HDF5 makes no call that writes, so a killed run
- * leaves the file as of its last commit; a kill inside a commit can leave
- * datasets longer than the counter says, which is why readers trust only
- * committed_samples rows. HDF5 is synchronous (no background writer), and a
- * process killed by a signal keeps what it already passed to write(2).
+ * Kill safety (docs/reliability.md, "Results files"). HDF5 1.10 has no
+ * journal, so the writer keeps three rules that together make every
+ * committed sample survive a kill at any write (tests/test_results_safety.c
+ * kills a run at every one of its writes):
+ *  1. The file is touched ONLY inside a commit: samples and events are
+ *     buffered by cd_h5_append; a commit (cd_h5_flush, or a full buffer)
+ *     writes every pending row and flushes (H5Fflush), then rewrites the
+ *     counters /committed_events and /committed_samples (the latter last)
+ *     in place and flushes again. Readers trust only committed rows.
+ *  2. Space is never reused (file space strategy NONE). A commit rewrites
+ *     the last, partly filled chunk of every series; a deflated chunk that
+ *     grew moves to new space. With HDF5's default strategy the space it
+ *     left was handed to the next chunk written in the same commit while
+ *     the chunk index on disk still pointed there: a kill before the index
+ *     was flushed left committed rows that no longer decompressed, or read
+ *     as zeros (measured: 49 of 262 kill points damaged committed rows).
+ *     Now the old copy stays intact until the new index is on disk; the
+ *     file grows by the rewritten chunks (+6 % for the Fig. 5 grasp).
+ *  3. No metadata grows after the layout: every attribute, including those
+ *     written at close (t_final, stats_*, closed_utc, the status), exists
+ *     from the start at its final size and is rewritten in place. HDF5
+ *     flushes metadata in address order, so an object header written before
+ *     the new continuation block it points to (which lies at the end of the
+ *     file) made the whole root unreadable when the run was killed between
+ *     the two writes.
+ *  4. No chunk index grows past one B-tree node: HDF5 writes a split node's
+ *     parent (a lower address) before its new children, so a kill between
+ *     them left the committed rows of the wide contact series unreadable
+ *     (measured on the whole Fig. 5 run: 9 of 507 kill points, all in the
+ *     commit where /contacts/ft etc. passed 64 chunks). Chunks are sized
+ *     from the run's expected sample count (CD_H5_MAX_CHUNKS).
+ * What is not covered: a run longer than expected (a library caller
+ * without a scenario, sc == NULL), or so long that 60 chunks of 4 MiB do
+ * not hold a series, splits the index again; the window is a few writes
+ * per split.
+ * A process killed by a signal keeps what it already passed to write(2);
+ * nothing here calls fsync, so a power loss is not covered.
  *
- * The file uses the default (earliest) format: superblock version 0 has no
- * "file open for writing" flag, so a file left by a killed writer opens
- * without h5clear.
+ * The file never replaces the scenario nor another run's file: see
+ * claim_output(). The superblock is version 2 (the space strategy needs
+ * it), which has no "file open for writing" flag that HDF5 1.10 checks, so
+ * a file left by a killed writer opens without h5clear.
+ *
+ * Non-finite outputs: cd_h5_append stores the sample, then refuses a row
+ * with an inf or NaN (CD_ENUMERIC naming the dataset, the element and the
+ * time), so that a run never ends "ok" with non-finite results.
  *
  * Write failures (docs/results-format.md, "When writing fails"). Before a
  * commit writes anything, check_space() asks the file system (statvfs) and
@@ -33,18 +63,22 @@
  * HDF5 prints its error stack by default; every public call here silences
  * the automatic printing for its own duration (saved and restored), so the
  * library never prints. */
+#define _DEFAULT_SOURCE /* flock */
 #define _POSIX_C_SOURCE 200809L
 #include "capdyn/io.h"
 #include "../math/cd_math.h"
 
 #include <hdf5.h>
 #include "h5_util.h"
+#include "h5_schema.h"
 #include <errno.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <fcntl.h>
+#include <libgen.h>
+#include <sys/file.h>
 #include <sys/resource.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -59,11 +93,19 @@
  * allocates nothing in the file. */
 #define CD_H5_STATUS_LEN 48
 #define CD_H5_MESSAGE_LEN 1024
+#define CD_H5_UTC_LEN 32
+/* HDF5's v1 B-tree chunk index holds 64 chunks in a node (istore_k 32).
+ * Splitting a node writes the parent before the new children (address
+ * order), which a kill between the two leaves pointing at nothing: chunks
+ * are sized so that a run stays below 60 chunks per series (margin for the
+ * rows appended after a failure) when that keeps chunks under 4 MiB. */
+#define CD_H5_MAX_CHUNKS 60
+#define CD_H5_MAX_CHUNK_BYTES (4u << 20)
 /* Room a commit keeps beyond its own estimate: metadata (chunk index nodes,
  * object header continuations) and the closing attributes. */
 #define CD_H5_SPACE_MARGIN (512.0 * 1024.0)
 
-enum { T_F64 = 0, T_I64, T_I8 };
+enum { T_F64 = CD_H5_F64, T_I64 = CD_H5_I64, T_I8 = CD_H5_I8 };
 
 /* One time series: a dataset (n x tail...) extended on every commit, and a
  * buffer of rows not yet written. */
@@ -77,9 +119,9 @@ typedef struct {
     long long chunk_rows; /* rows per chunk (for the space estimate) */
 } h5_series;
 
-/* series indices of one system */
+/* series indices of one system, by series id (-1: not in this system) */
 typedef struct {
-    int pos, quat, vel, angvel, q, qd, body_x, body_c, body_quat;
+    int idx[CD_SER_COUNT];
 } sys_series;
 
 struct cd_h5_writer {
@@ -91,10 +133,8 @@ struct cd_h5_writer {
     long long nwritten;           /* rows on disk (= committed after a commit) */
     long long ncommitted;         /* the committed_samples of the last good commit */
     /* series indices */
-    int s_time;
+    int s[CD_SER_COUNT];          /* series index of each id outside /systems (-1: none) */
     sys_series *s_sys;
-    int s_fn, s_ft, s_x, s_xdot, s_point, s_normal, s_vt, s_mode;
-    int s_ke, s_pe, s_P, s_Lc, s_Lo, s_com, s_h, s_nrhs, s_nsteps, s_nrej, s_nev, s_wall;
     /* events */
     hid_t ev_dset, ev_mtype, ev_ftype, kind_enum, mode_enum;
     cd_event *evbuf;
@@ -104,6 +144,7 @@ struct cd_h5_writer {
     long long ev_lost;
     struct timespec wall0;
     char *path;                   /* for messages and the free-space check */
+    int lock_fd;                  /* holds flock(LOCK_EX) on the file while it is written */
     /* failed: an HDF5 write failed; the file on disk may be damaged beyond
      * its last commit and nothing more is written to it.
      * stopped: the space check refused a commit before writing anything;
@@ -113,6 +154,7 @@ struct cd_h5_writer {
     char why[512];                /* the first error, repeated by later calls */
     int space_check;              /* check free space before each commit (default 1) */
     double reserve;               /* bytes the check keeps free beyond its estimate */
+    long long expect_rows;        /* samples the run expects (duration / output_dt + 2), 0 if unknown */
 };
 
 /* ---- error plumbing --------------------------------------------------------- */
@@ -491,6 +533,15 @@ static int add_series(cd_h5_writer *w, hid_t loc, const char *name, int type, in
     chunk[0] = (hsize_t)(32768 / rowbytes);
     if (chunk[0] < 16) chunk[0] = 16;
     if (chunk[0] > 4096) chunk[0] = 4096;
+    /* ... but no more than CD_H5_MAX_CHUNKS chunks for the rows the run is
+     * expected to write (kill safety: the chunk index then never splits a
+     * node, see the top of the file), up to CD_H5_MAX_CHUNK_BYTES a chunk */
+    if (w->expect_rows > 0) {
+        long long need = (w->expect_rows + CD_H5_MAX_CHUNKS - 1) / CD_H5_MAX_CHUNKS;
+        long long cap = (long long)(CD_H5_MAX_CHUNK_BYTES / rowbytes);
+        if (need > cap) need = cap;
+        if (need > (long long)chunk[0]) chunk[0] = (hsize_t)need;
+    }
     chunk[1] = t0;
     chunk[2] = t1;
     s->chunk_rows = (long long)chunk[0];
@@ -743,6 +794,7 @@ static void writer_free(cd_h5_writer *w)
     if (w->kind_enum >= 0) H5Tclose(w->kind_enum);
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
     if (w->file >= 0) H5Fclose(w->file);
+    if (w->lock_fd >= 0) close(w->lock_fd);
     free(w->path);
     free(w);
 }
@@ -793,13 +845,33 @@ static int create_event_types(cd_h5_writer *w)
     return 0;
 }
 
+/* Creates every series of group g listed in cd_h5_series_defs (h5_schema.h)
+ * under loc, its indices into idx (by series id); a series whose rows would
+ * be empty (no joints) is left out (-1). njoint, nbody: of system sys. */
+static int add_group_series(cd_h5_writer *w, hid_t loc, cd_h5_group g, const cd_model *m, int njoint, int nbody,
+                            int *idx)
+{
+    int k, nt;
+    long t[2];
+    for (k = 0; k < CD_SER_COUNT; k++) {
+        const cd_h5_series_def *def = cd_h5_series_defs + k;
+        if (def->group != g) continue;
+        cd_h5_shape_rowlen(def->shape, m->nsys, m->nslot, njoint, nbody, &nt, t);
+        idx[k] = -1;
+        if (nt > 0 && t[0] == 0) continue; /* q and qd of a system without joints */
+        idx[k] = add_series(w, loc, def->name, def->type, nt, (hsize_t)t[0], (hsize_t)t[1], def->units,
+                            def->description);
+        if (idx[k] < 0) return -1;
+    }
+    return 0;
+}
+
 static int create_layout(cd_h5_writer *w, const cd_model *m)
 {
     hid_t g, gs, gc, gd;
-    int s, ok = 1;
-    hsize_t ns = (hsize_t)m->nsys, nk = (hsize_t)m->nslot;
-    w->s_time = add_series(w, w->file, "time", T_F64, 0, 0, 0, "s", "simulated time of each sample");
-    ok &= w->s_time >= 0;
+    int s, k, ok = 1;
+    for (k = 0; k < CD_SER_COUNT; k++) w->s[k] = -1;
+    if (add_group_series(w, w->file, CD_G_ROOT, m, 0, 0, w->s) < 0) return -1;
     /* systems */
     g = H5Gcreate2(w->file, "systems", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     if (g < 0) return -1;
@@ -826,21 +898,8 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
             if (nj > 0) attr_strv(gs, "joint_names", nj, jn + 1, CD_H5_NAMELEN);
             free(jn);
         }
-        ss->pos = add_series(w, gs, "base_pos", T_F64, 1, 3, 0, "m", "base CoM position, world (SpaceDyn R0)");
-        ss->quat = add_series(w, gs, "base_quat", T_F64, 1, 4, 0, "1", "base orientation (w,x,y,z), body -> world");
-        ss->vel = add_series(w, gs, "base_vel", T_F64, 1, 3, 0, "m/s", "base CoM velocity, world");
-        ss->angvel = add_series(w, gs, "base_angvel", T_F64, 1, 3, 0, "rad/s", "base angular velocity, world");
-        ss->q = ss->qd = -1;
-        if (nj > 0) {
-            ss->q = add_series(w, gs, "q", T_F64, 1, (hsize_t)nj, 0, "rad|m", "joint positions, in body order");
-            ss->qd = add_series(w, gs, "qd", T_F64, 1, (hsize_t)nj, 0, "rad/s|m/s", "joint rates, in body order");
-            ok &= ss->q >= 0 && ss->qd >= 0;
-        }
-        ss->body_x = add_series(w, gs, "body_x", T_F64, 2, nb, 3, "m", "body frame origins (joint; base CoM), world");
-        ss->body_c = add_series(w, gs, "body_c", T_F64, 2, nb, 3, "m", "body centres of mass, world");
-        ss->body_quat = add_series(w, gs, "body_quat", T_F64, 2, nb, 4, "1", "body orientations (w,x,y,z), body -> world");
-        ok &= ss->pos >= 0 && ss->quat >= 0 && ss->vel >= 0 && ss->angvel >= 0 && ss->body_x >= 0 &&
-              ss->body_c >= 0 && ss->body_quat >= 0;
+        for (k = 0; k < CD_SER_COUNT; k++) ss->idx[k] = -1;
+        if (add_group_series(w, gs, CD_G_SYSTEM, m, nj, (int)nb, ss->idx) < 0) ok = 0;
         H5Gclose(gs);
     }
     H5Gclose(g);
@@ -854,19 +913,7 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
         attr_strv(gc, "mode_names", 3, mode_names, 8);
     }
     if (write_slot_table(gc, m) < 0) ok = 0;
-    w->s_fn = w->s_ft = w->s_x = w->s_xdot = w->s_point = w->s_normal = w->s_vt = w->s_mode = -1;
-    if (ok && m->nslot > 0) {
-        w->s_fn = add_series(w, gc, "fn", T_F64, 1, nk, 0, "N", "normal force (0 when open)");
-        w->s_ft = add_series(w, gc, "ft", T_F64, 2, nk, 3, "N", "tangential force on the check-point body, world");
-        w->s_x = add_series(w, gc, "penetration", T_F64, 1, nk, 0, "m", "penetration depth, > 0 inside");
-        w->s_xdot = add_series(w, gc, "penetration_rate", T_F64, 1, nk, 0, "m/s", "penetration rate");
-        w->s_point = add_series(w, gc, "point", T_F64, 2, nk, 3, "m", "contact point, world");
-        w->s_normal = add_series(w, gc, "normal", T_F64, 2, nk, 3, "1", "unit normal from the shape toward the check point");
-        w->s_vt = add_series(w, gc, "slip_velocity", T_F64, 2, nk, 3, "m/s", "tangential relative velocity");
-        w->s_mode = add_series(w, gc, "mode", T_I8, 1, nk, 0, "1", "0 open, 1 stick, 2 slip");
-        ok &= w->s_fn >= 0 && w->s_ft >= 0 && w->s_x >= 0 && w->s_xdot >= 0 && w->s_point >= 0 &&
-              w->s_normal >= 0 && w->s_vt >= 0 && w->s_mode >= 0;
-    }
+    if (ok && m->nslot > 0 && add_group_series(w, gc, CD_G_CONTACTS, m, 0, 0, w->s) < 0) ok = 0;
     H5Gclose(gc);
     if (!ok) return -1;
     /* events */
@@ -890,20 +937,7 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
     /* diagnostics */
     gd = H5Gcreate2(w->file, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
     if (gd < 0) return -1;
-    w->s_ke = add_series(w, gd, "kinetic_energy", T_F64, 1, ns, 0, "J", "kinetic energy per system");
-    w->s_pe = add_series(w, gd, "potential_energy", T_F64, 1, ns, 0, "J", "gravitational potential energy per system");
-    w->s_P = add_series(w, gd, "momentum", T_F64, 2, ns, 3, "kg m/s", "linear momentum per system, world");
-    w->s_Lc = add_series(w, gd, "angular_momentum_com", T_F64, 2, ns, 3, "kg m^2/s", "angular momentum about the system CoM");
-    w->s_Lo = add_series(w, gd, "angular_momentum_origin", T_F64, 2, ns, 3, "kg m^2/s", "angular momentum about the world origin");
-    w->s_com = add_series(w, gd, "com", T_F64, 2, ns, 3, "m", "system centre of mass, world");
-    w->s_h = add_series(w, gd, "step_size", T_F64, 0, 0, 0, "s", "last accepted integrator step");
-    w->s_nrhs = add_series(w, gd, "nrhs", T_I64, 0, 0, 0, "1", "right-hand-side evaluations so far");
-    w->s_nsteps = add_series(w, gd, "nsteps", T_I64, 0, 0, 0, "1", "accepted steps so far");
-    w->s_nrej = add_series(w, gd, "nrejected", T_I64, 0, 0, 0, "1", "rejected trial steps so far");
-    w->s_nev = add_series(w, gd, "nevents", T_I64, 0, 0, 0, "1", "events located so far");
-    w->s_wall = add_series(w, gd, "wall_time", T_F64, 0, 0, 0, "s", "wall-clock time since the file was created");
-    ok &= w->s_ke >= 0 && w->s_pe >= 0 && w->s_P >= 0 && w->s_Lc >= 0 && w->s_Lo >= 0 && w->s_com >= 0 &&
-          w->s_h >= 0 && w->s_nrhs >= 0 && w->s_nsteps >= 0 && w->s_nrej >= 0 && w->s_nev >= 0 && w->s_wall >= 0;
+    ok = add_group_series(w, gd, CD_G_DIAGNOSTICS, m, 0, 0, w->s) == 0;
     H5Gclose(gd);
     return ok ? 0 : -1;
 }
@@ -930,6 +964,34 @@ static void utc_now(char *out, size_t len)
     struct tm tmv;
     if (gmtime_r(&now, &tmv)) strftime(out, len, "%Y-%m-%dT%H:%M:%SZ", &tmv);
     else snprintf(out, len, "unknown");
+}
+
+/* The attributes written at close. They are created with the layout
+ * (d == NULL: placeholders, NaN and -1, closed_utc "") at their final size,
+ * so that closing rewrites them in place and adds no metadata (rule 3 at
+ * the top of this file). Readers trust them once run_status is not
+ * "running". */
+static int write_closing_attrs(hid_t f, const cd_data *d)
+{
+    const cd_stats *s = d ? &d->stats : NULL;
+    char when[CD_H5_UTC_LEN];
+    int rc = 0;
+    if (d) utc_now(when, sizeof when);
+    else when[0] = 0;
+    rc |= attr_f64(f, "t_final", d ? d->t : NAN);
+    rc |= attr_i64(f, "stats_nrhs", s ? s->nrhs : -1);
+    rc |= attr_i64(f, "stats_nsteps", s ? s->nsteps : -1);
+    rc |= attr_i64(f, "stats_nrejected", s ? s->nrejected : -1);
+    rc |= attr_i64(f, "stats_nevents", s ? s->nevents : -1);
+    rc |= attr_i64(f, "stats_nlocate_steps", s ? s->nlocate_steps : -1);
+    rc |= attr_i64(f, "stats_nwarn_geom", s ? s->nwarn_geom : -1);
+    rc |= attr_i64(f, "stats_nwarn_dwell", s ? s->nwarn_dwell : -1);
+    rc |= attr_i64(f, "stats_nrenorm", s ? s->nrenorm : -1);
+    rc |= attr_f64(f, "stats_h_last", s ? s->h_last : NAN);
+    rc |= attr_f64(f, "stats_h_min", s ? (s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0) : NAN);
+    rc |= attr_f64(f, "stats_h_max", s ? s->h_max_seen : NAN);
+    rc |= attr_str_fixed(f, "closed_utc", when, CD_H5_UTC_LEN);
+    return rc;
 }
 
 static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenario *sc)
@@ -967,42 +1029,175 @@ static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenari
                          CD_H5_MESSAGE_LEN);
     rc |= attr_i64(f, "committed_events", 0);
     rc |= attr_i64(f, "committed_samples", 0);
+    rc |= write_closing_attrs(f, NULL);
     return rc ? -1 : 0;
+}
+
+/* ---- output path safety -------------------------------------------------------- */
+/* Where a new results file goes (docs/reliability.md, "Output path safety").
+ * The file is written under a temporary name in the directory of the
+ * target and renamed onto the target once its layout is on disk, so that
+ *  - an existing file at the target is replaced only by a complete,
+ *    readable file, never truncated (a run killed while creating its file
+ *    leaves the old one and a temporary ".NAME.tmp-PID-N");
+ *  - from then on the run writes under the requested name: a killed run
+ *    leaves its committed samples there, and `capdyn info` reads a file a
+ *    run is still writing;
+ *  - a file another run is writing is never touched: the writer holds an
+ *    exclusive flock on its file until it closes, and a new writer checks
+ *    that lock (while holding a lock on the directory, until its rename)
+ *    and refuses the target if it is held;
+ *  - the target is never the scenario (same device and inode, so also
+ *    through a symbolic or hard link) nor something other than a regular
+ *    file; a symbolic link is followed (the file it names is replaced).
+ * HDF5's own file locking is turned off for the writer (it would conflict
+ * with this lock, which is taken on another descriptor). */
+typedef struct {
+    char *target;   /* the file to replace (the path, or where its symlink points) */
+    char *tmp;      /* the temporary name, NULL once renamed */
+    int dir_fd;     /* locked while the target is checked and replaced */
+    int lock_fd;    /* the temporary file, flock'ed */
+} out_claim;
+
+static void claim_release(out_claim *c)
+{
+    if (c->tmp) {
+        unlink(c->tmp);
+        free(c->tmp);
+        c->tmp = NULL;
+    }
+    if (c->lock_fd >= 0) close(c->lock_fd);
+    if (c->dir_fd >= 0) close(c->dir_fd);
+    c->lock_fd = c->dir_fd = -1;
+    free(c->target);
+    c->target = NULL;
+}
+
+static int claim_output(const char *path, const cd_scenario *sc, out_claim *c, cd_error *err)
+{
+    struct stat st, ss;
+    char *dcopy = NULL, *bcopy = NULL, *dir, *base;
+    int exists, i;
+    c->target = c->tmp = NULL;
+    c->dir_fd = c->lock_fd = -1;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        c->target = realpath(path, NULL);
+        if (!c->target) {
+            seterr(err, CD_EIO, "cannot create results file '%s': it is a symbolic link to a missing file", path);
+            return -1;
+        }
+    } else {
+        c->target = malloc(strlen(path) + 1);
+        if (c->target) strcpy(c->target, path);
+    }
+    if (!c->target) goto nomem;
+    exists = stat(c->target, &st) == 0;
+    if (exists && S_ISDIR(st.st_mode)) {
+        seterr(err, CD_EIO, "cannot create results file '%s': it is a directory", path);
+        goto fail;
+    }
+    if (exists && !S_ISREG(st.st_mode)) {
+        seterr(err, CD_EIO, "cannot create results file '%s': it exists and is not a regular file", path);
+        goto fail;
+    }
+    if (exists && sc && sc->path && stat(sc->path, &ss) == 0 && ss.st_dev == st.st_dev && ss.st_ino == st.st_ino) {
+        seterr(err, CD_EIO, "cannot write results to '%s': it is the scenario file '%s' (choose another -o)", path,
+               sc->path);
+        goto fail;
+    }
+    dcopy = malloc(strlen(c->target) + 1);
+    bcopy = malloc(strlen(c->target) + 1);
+    if (!dcopy || !bcopy) goto nomem;
+    strcpy(dcopy, c->target);
+    strcpy(bcopy, c->target);
+    dir = dirname(dcopy);
+    base = basename(bcopy);
+    c->dir_fd = open(dir, O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    if (c->dir_fd < 0) {
+        seterr(err, CD_EIO, "cannot create results file '%s': %s", path, strerror(errno));
+        goto fail;
+    }
+    (void)flock(c->dir_fd, LOCK_EX); /* best effort: not every file system has it */
+    if (exists) {
+        int fd = open(c->target, O_RDONLY | O_NOCTTY | O_CLOEXEC);
+        if (fd >= 0) {
+            int busy = flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+            close(fd); /* drops the probe's lock */
+            if (busy) {
+                seterr(err, CD_EIO,
+                       "cannot write results file '%s': another run is writing it (the file is locked); "
+                       "choose another -o or wait for that run to end",
+                       path);
+                goto fail;
+            }
+        }
+    }
+    c->tmp = malloc(strlen(dir) + strlen(base) + 64);
+    if (!c->tmp) goto nomem;
+    for (i = 0; i < 100; i++) {
+        sprintf(c->tmp, "%s/.%s.tmp-%ld-%d", dir, base, (long)getpid(), i);
+        c->lock_fd = open(c->tmp, O_RDWR | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0666);
+        if (c->lock_fd >= 0 || errno != EEXIST) break;
+    }
+    if (c->lock_fd < 0) {
+        seterr(err, CD_EIO, "cannot create results file '%s': %s", path, strerror(errno));
+        free(c->tmp);
+        c->tmp = NULL;
+        goto fail;
+    }
+    (void)flock(c->lock_fd, LOCK_EX | LOCK_NB);
+    free(dcopy);
+    free(bcopy);
+    return 0;
+nomem:
+    seterr(err, CD_ENOMEM, "out of memory");
+fail:
+    free(dcopy);
+    free(bcopy);
+    claim_release(c);
+    return -1;
+}
+
+/* The temporary file becomes the target; the directory lock is dropped. */
+static int claim_commit(out_claim *c, const char *path, cd_error *err)
+{
+    int rc = rename(c->tmp, c->target);
+    if (rc != 0) {
+        seterr(err, CD_EIO, "cannot create results file '%s': renaming '%s' onto it failed: %s", path, c->tmp,
+               strerror(errno));
+        return -1;
+    }
+    free(c->tmp);
+    c->tmp = NULL;
+    close(c->dir_fd);
+    c->dir_fd = -1;
+    return 0;
 }
 
 cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err)
 {
     cd_h5_writer *w;
     cd_h5_quiet q;
-    struct stat st;
-    int existed;
-    FILE *probe;
+    out_claim c;
+    hid_t fcpl, fapl;
     if (!path || !m || !m->finalized) {
         seterr(err, CD_EINVAL, "cd_h5_create: path or model missing, or model not finalized");
         return NULL;
     }
-    /* fail fast with the system's reason (HDF5's own message does not carry errno) */
-    existed = stat(path, &st) == 0;
-    if (existed && S_ISDIR(st.st_mode)) {
-        seterr(err, CD_EIO, "cannot create results file '%s': it is a directory", path);
-        return NULL;
-    }
-    probe = fopen(path, "ab");
-    if (!probe) {
-        seterr(err, CD_EIO, "cannot create results file '%s': %s", path, strerror(errno));
-        return NULL;
-    }
-    fclose(probe);
+    if (claim_output(path, sc, &c, err) < 0) return NULL;
     w = calloc(1, sizeof *w);
     if (!w) {
-        if (!existed) remove(path);
+        claim_release(&c);
         seterr(err, CD_ENOMEM, "out of memory");
         return NULL;
     }
     w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = -1;
+    w->lock_fd = -1;
     w->space_check = 1;
     w->path = malloc(strlen(path) + 1);
     if (w->path) strcpy(w->path, path);
+    if (sc && sc->output_dt > 0 && sc->duration > 0 && sc->duration / sc->output_dt < 1e12)
+        w->expect_rows = (long long)(sc->duration / sc->output_dt) + 2;
     w->nsys = m->nsys;
     w->nbody = m->nbody;
     w->nslot = m->nslot;
@@ -1013,16 +1208,23 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         free(w->s_sys);
         free(w->path);
         free(w);
-        if (!existed) remove(path);
+        claim_release(&c);
         seterr(err, CD_ENOMEM, "out of memory");
         return NULL;
     }
     cd_h5_quiet_begin(&q);
-    w->file = H5Fcreate(path, H5F_ACC_TRUNC, H5P_DEFAULT, H5P_DEFAULT);
+    /* rule 2 (top of the file): never reuse freed space */
+    fcpl = H5Pcreate(H5P_FILE_CREATE);
+    fapl = H5Pcreate(H5P_FILE_ACCESS);
+    if (fcpl >= 0) (void)H5Pset_file_space_strategy(fcpl, H5F_FSPACE_STRATEGY_NONE, 0, (hsize_t)1);
+    if (fapl >= 0) (void)H5Pset_file_locking(fapl, 0, 1);
+    w->file = fcpl >= 0 && fapl >= 0 ? H5Fcreate(c.tmp, H5F_ACC_TRUNC, fcpl, fapl) : -1;
+    if (fcpl >= 0) H5Pclose(fcpl);
+    if (fapl >= 0) H5Pclose(fapl);
     if (w->file < 0) {
         cd_h5_quiet_end(&q);
         writer_free(w);
-        if (!existed) remove(path);
+        claim_release(&c);
         seterr(err, CD_EIO, "cannot create results file '%s': HDF5 refused to create it", path);
         return NULL;
     }
@@ -1032,12 +1234,23 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         w->failed = 1; /* closed without writing more, then removed */
         writer_free(w);
         cd_h5_quiet_end(&q);
-        remove(path);
+        claim_release(&c);
         seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full, file size limit or HDF5 error)",
                path);
         return NULL;
     }
     cd_h5_quiet_end(&q);
+    if (claim_commit(&c, path, err) < 0) {
+        cd_h5_quiet_begin(&q);
+        writer_free(w);
+        cd_h5_quiet_end(&q);
+        claim_release(&c);
+        return NULL;
+    }
+    /* the lock is held (on the renamed file) until writer_free */
+    w->lock_fd = c.lock_fd;
+    c.lock_fd = -1;
+    claim_release(&c);
     return w;
 }
 
@@ -1067,10 +1280,39 @@ static int take_events(cd_h5_writer *w, const cd_data *d)
     return 0;
 }
 
+/* Every number of the row just buffered must be finite: a sample with an inf
+ * or NaN (an energy that overflowed, a state that blew up) is kept in the
+ * file, and the first such value is named as the error. */
+static cd_status check_finite(cd_h5_writer *w, double t, cd_error *err)
+{
+    int i;
+    size_t k;
+    for (i = 0; i < w->nser; i++) {
+        const h5_series *s = w->ser + i;
+        const double *v;
+        if (s->type != T_F64) continue;
+        v = (const double *)(const void *)(s->buf + (size_t)(w->nbuf - 1) * s->rowlen * sizeof(double));
+        for (k = 0; k < s->rowlen; k++)
+            if (!isfinite(v[k])) {
+                char name[256] = "?";
+                cd_h5_quiet q;
+                cd_h5_quiet_begin(&q);
+                (void)H5Iget_name(s->dset, name, sizeof name);
+                cd_h5_quiet_end(&q);
+                seterr(err, CD_ENUMERIC, "non-finite output: %s element %lu of the sample at t = %.9g s is %s (sample %lld)",
+                       name, (unsigned long)k, t, isnan(v[k]) ? "NaN" : v[k] > 0 ? "+inf" : "-inf",
+                       w->nwritten + w->nbuf - 1);
+                return CD_ENUMERIC;
+            }
+    }
+    return CD_OK;
+}
+
 cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_error *err)
 {
     int s, k, b, i;
     struct timespec now;
+    cd_status fin;
     if (!w || !m || !d) {
         seterr(err, CD_EINVAL, "cd_h5_append: NULL argument");
         return CD_EINVAL;
@@ -1080,13 +1322,13 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
         return CD_EINVAL;
     }
     if (w->failed || w->stopped) return refused(w, err);
-    row_f64(w, w->s_time)[0] = d->t;
+    row_f64(w, w->s[CD_SER_TIME])[0] = d->t;
     for (s = 0; s < m->nsys; s++) {
         const sys_series *ss = w->s_sys + s;
         cd_sys_state x = cd_state_of(m, d, s);
         int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s];
-        double *p = row_f64(w, ss->pos), *qt = row_f64(w, ss->quat), *v = row_f64(w, ss->vel),
-               *av = row_f64(w, ss->angvel);
+        double *p = row_f64(w, ss->idx[CD_SER_BASE_POS]), *qt = row_f64(w, ss->idx[CD_SER_BASE_QUAT]), *v = row_f64(w, ss->idx[CD_SER_BASE_VEL]),
+               *av = row_f64(w, ss->idx[CD_SER_BASE_ANGVEL]);
         if (x.pos) {
             memcpy(p, x.pos, 3 * sizeof(double));
             memcpy(qt, x.quat, 4 * sizeof(double));
@@ -1099,12 +1341,12 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
             memset(v, 0, 3 * sizeof(double));
             memset(av, 0, 3 * sizeof(double));
         }
-        if (ss->q >= 0) {
-            memcpy(row_f64(w, ss->q), x.q, (size_t)x.njoint * sizeof(double));
-            memcpy(row_f64(w, ss->qd), x.qd, (size_t)x.njoint * sizeof(double));
+        if (ss->idx[CD_SER_Q] >= 0) {
+            memcpy(row_f64(w, ss->idx[CD_SER_Q]), x.q, (size_t)x.njoint * sizeof(double));
+            memcpy(row_f64(w, ss->idx[CD_SER_QD]), x.qd, (size_t)x.njoint * sizeof(double));
         }
         {
-            double *bx = row_f64(w, ss->body_x), *bc = row_f64(w, ss->body_c), *bq = row_f64(w, ss->body_quat);
+            double *bx = row_f64(w, ss->idx[CD_SER_BODY_X]), *bc = row_f64(w, ss->idx[CD_SER_BODY_C]), *bq = row_f64(w, ss->idx[CD_SER_BODY_QUAT]);
             for (i = 0; i < nb; i++) {
                 b = b0 + i;
                 memcpy(bx + 3 * i, d->body_x + 3 * b, 3 * sizeof(double));
@@ -1115,45 +1357,47 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     }
     if (m->nslot > 0) {
         size_t n1 = (size_t)m->nslot * sizeof(double), n3 = 3 * n1;
-        signed char *mo = row_i8(w, w->s_mode);
-        memcpy(row_f64(w, w->s_fn), d->slot_fn, n1);
-        memcpy(row_f64(w, w->s_ft), d->slot_ft, n3);
-        memcpy(row_f64(w, w->s_x), d->slot_x, n1);
-        memcpy(row_f64(w, w->s_xdot), d->slot_xdot, n1);
-        memcpy(row_f64(w, w->s_point), d->slot_point, n3);
-        memcpy(row_f64(w, w->s_normal), d->slot_normal, n3);
-        memcpy(row_f64(w, w->s_vt), d->slot_vt, n3);
+        signed char *mo = row_i8(w, w->s[CD_SER_MODE]);
+        memcpy(row_f64(w, w->s[CD_SER_FN]), d->slot_fn, n1);
+        memcpy(row_f64(w, w->s[CD_SER_FT]), d->slot_ft, n3);
+        memcpy(row_f64(w, w->s[CD_SER_PENETRATION]), d->slot_x, n1);
+        memcpy(row_f64(w, w->s[CD_SER_PENETRATION_RATE]), d->slot_xdot, n1);
+        memcpy(row_f64(w, w->s[CD_SER_POINT]), d->slot_point, n3);
+        memcpy(row_f64(w, w->s[CD_SER_NORMAL]), d->slot_normal, n3);
+        memcpy(row_f64(w, w->s[CD_SER_SLIP_VELOCITY]), d->slot_vt, n3);
         for (k = 0; k < m->nslot; k++) mo[k] = (signed char)d->slot_mode[k];
     }
     {
-        double *ke = row_f64(w, w->s_ke), *pe = row_f64(w, w->s_pe), *P = row_f64(w, w->s_P),
-               *Lc = row_f64(w, w->s_Lc), *Lo = row_f64(w, w->s_Lo), *com = row_f64(w, w->s_com);
+        double *ke = row_f64(w, w->s[CD_SER_KE]), *pe = row_f64(w, w->s[CD_SER_PE]), *P = row_f64(w, w->s[CD_SER_MOMENTUM]),
+               *Lc = row_f64(w, w->s[CD_SER_L_COM]), *Lo = row_f64(w, w->s[CD_SER_L_ORIGIN]), *com = row_f64(w, w->s[CD_SER_COM]);
         for (s = 0; s < m->nsys; s++) {
             cd_momentum(m, d, s, ke + s, P + 3 * s, Lc + 3 * s, Lo + 3 * s, com + 3 * s);
             pe[s] = cd_potential_energy(m, d, s);
         }
     }
-    row_f64(w, w->s_h)[0] = d->stats.h_last;
-    row_i64(w, w->s_nrhs)[0] = d->stats.nrhs;
-    row_i64(w, w->s_nsteps)[0] = d->stats.nsteps;
-    row_i64(w, w->s_nrej)[0] = d->stats.nrejected;
-    row_i64(w, w->s_nev)[0] = d->stats.nevents;
+    row_f64(w, w->s[CD_SER_STEP_SIZE])[0] = d->stats.h_last;
+    row_i64(w, w->s[CD_SER_NRHS])[0] = d->stats.nrhs;
+    row_i64(w, w->s[CD_SER_NSTEPS])[0] = d->stats.nsteps;
+    row_i64(w, w->s[CD_SER_NREJECTED])[0] = d->stats.nrejected;
+    row_i64(w, w->s[CD_SER_NEVENTS])[0] = d->stats.nevents;
     clock_gettime(CLOCK_MONOTONIC, &now);
-    row_f64(w, w->s_wall)[0] = (double)(now.tv_sec - w->wall0.tv_sec) + 1e-9 * (double)(now.tv_nsec - w->wall0.tv_nsec);
+    row_f64(w, w->s[CD_SER_WALL_TIME])[0] = (double)(now.tv_sec - w->wall0.tv_sec) + 1e-9 * (double)(now.tv_nsec - w->wall0.tv_nsec);
     if (take_events(w, d) < 0) {
         seterr(err, CD_ENOMEM, "out of memory buffering events");
         return CD_ENOMEM;
     }
     w->nbuf++;
+    fin = check_finite(w, d->t, err); /* the row is kept either way */
     if (w->nbuf == w->cap_rows) {
         cd_h5_quiet q;
         cd_status st;
+        cd_error cerr;
         cd_h5_quiet_begin(&q);
-        st = commit(w, err);
+        st = commit(w, fin == CD_OK ? err : &cerr);
         cd_h5_quiet_end(&q);
-        return st;
+        if (st != CD_OK) return st;
     }
-    return CD_OK;
+    return fin;
 }
 
 cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err)
@@ -1201,25 +1445,11 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
     /* a writer stopped by the space check writes these (a few kB, most in
      * place) if there is still room for them */
     if (!w->failed && (!w->stopped || check_space(w, 65536.0, tmp.msg, sizeof tmp.msg) == 0)) {
-        if (d) {
-            const cd_stats *s = &d->stats;
-            rc |= attr_f64(f, "t_final", d->t);
-            rc |= attr_i64(f, "stats_nrhs", s->nrhs);
-            rc |= attr_i64(f, "stats_nsteps", s->nsteps);
-            rc |= attr_i64(f, "stats_nrejected", s->nrejected);
-            rc |= attr_i64(f, "stats_nevents", s->nevents);
-            rc |= attr_i64(f, "stats_nlocate_steps", s->nlocate_steps);
-            rc |= attr_i64(f, "stats_nwarn_geom", s->nwarn_geom);
-            rc |= attr_i64(f, "stats_nwarn_dwell", s->nwarn_dwell);
-            rc |= attr_i64(f, "stats_nrenorm", s->nrenorm);
-            rc |= attr_f64(f, "stats_h_last", s->h_last);
-            rc |= attr_f64(f, "stats_h_min", s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0);
-            rc |= attr_f64(f, "stats_h_max", s->h_max_seen);
-        }
-        {
-            char when[64];
+        if (d) rc |= write_closing_attrs(f, d);
+        else {
+            char when[CD_H5_UTC_LEN];
             utc_now(when, sizeof when);
-            rc |= attr_str(f, "closed_utc", when);
+            rc |= attr_str_fixed(f, "closed_utc", when, CD_H5_UTC_LEN);
         }
         if (rc || H5Fflush(f, H5F_SCOPE_GLOBAL) < 0) {
             if (st == CD_OK) st = write_failed(w, err, "writing the final statistics");
@@ -1231,6 +1461,16 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
             cd_status fst = run_status;
             const char *fmsg = message ? message : "";
             char both[CD_H5_MESSAGE_LEN];
+            /* a run that ends "ok" with a non-finite summary did not end well */
+            if (st == CD_OK && run_status == CD_OK && d &&
+                (!isfinite(d->t) || !isfinite(d->stats.h_last) || !isfinite(d->stats.h_max_seen))) {
+                fst = CD_ENUMERIC;
+                snprintf(both, sizeof both, "non-finite summary at the end of the run: t_final = %g, stats_h_last = %g, "
+                         "stats_h_max = %g", d->t, d->stats.h_last, d->stats.h_max_seen);
+                fmsg = both;
+                seterr(err, CD_ENUMERIC, "%s", both);
+                st = CD_ENUMERIC;
+            }
             if (st != CD_OK) {
                 fst = st;
                 if (run_status == CD_OK || strcmp(fmsg, err->msg) == 0)

@@ -1,5 +1,15 @@
 /* Reader of capdyn HDF5 results (see h5_read.h and docs/results-format.md).
  *
+ * Untrusted input (docs/reliability.md, "Untrusted results files"): every
+ * size or index read from a file is checked before it is used: table sizes
+ * against the root attributes that repeat them, every index of the static
+ * tables against the table it points into, every series' shape and type
+ * against the schema (h5_schema.h) and the static tables, the sample count
+ * against the rows on disk and a bound, string attributes against a size
+ * bound. A file that fails a check is refused with a message naming what
+ * is wrong. HDF5 itself may still crash on a damaged file: the CLI reads in
+ * a child process for that (src/cli/capdyn.c).
+ *
  * Compound tables are read through memory types that name only the members
  * needed: HDF5 matches compound members by name, so the reader keeps working
  * when later format versions add members. */
@@ -7,6 +17,7 @@
 
 #include <hdf5.h>
 #include "h5_util.h"
+#include "h5_schema.h"
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -39,30 +50,55 @@ static void mem_arr(hid_t ct, const char *name, size_t off, hsize_t n)
     H5Tclose(t);
 }
 
-/* rows of a 1-D table; returns the count or -1 */
-static long table_rows(hid_t f, const char *path)
+/* Bounds on sizes read from a file (far above anything a run writes). */
+#define CD_H5R_MAX_ROWS 2000000000L /* samples, events (the loader allows 1e9 samples) */
+#define CD_H5R_MAX_TABLE 10000000L  /* bodies, check points, shapes, vertices, slots */
+#define CD_H5R_MAX_STR (1L << 20)   /* a string attribute [bytes] (the writer's are < 64 KiB) */
+#define CD_H5R_MAX_TEXT (1L << 30)  /* a text dataset [bytes] */
+
+/* rows of a 1-D table (or the first dimension of a dataset of rank 1..3);
+ * returns the count, or -1 if missing, of another rank, or beyond max */
+static long table_rows_max(hid_t f, const char *path, long max)
 {
     hid_t ds = H5Dopen2(f, path, H5P_DEFAULT), sp;
-    hsize_t d[2] = {0, 0};
+    hsize_t d[3] = {0, 0, 0};
+    int rank;
     if (ds < 0) return -1;
     sp = H5Dget_space(ds);
-    H5Sget_simple_extent_dims(sp, d, NULL);
-    H5Sclose(sp);
+    rank = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
+    if (rank >= 1 && rank <= 3) H5Sget_simple_extent_dims(sp, d, NULL);
+    if (sp >= 0) H5Sclose(sp);
     H5Dclose(ds);
+    if (rank < 1 || rank > 3 || d[0] > (hsize_t)max) return -1;
     return (long)d[0];
 }
+static long table_rows(hid_t f, const char *path) { return table_rows_max(f, path, CD_H5R_MAX_TABLE); }
 
-static int read_table(hid_t f, const char *path, hid_t mt, long n, void *out)
+/* Reads a whole table of n rows (of `cols` values each when cols > 0: a 2-D
+ * dataset n x cols) into out, sized for exactly that: a dataset of another
+ * shape is refused before HDF5 writes into out. */
+static int read_table_cols(hid_t f, const char *path, hid_t mt, long n, long cols, void *out)
 {
-    hid_t ds;
-    herr_t rc;
+    hid_t ds, sp;
+    hsize_t d[2] = {0, 0};
+    herr_t rc = -1;
+    int rank;
     if (n <= 0) return 0;
     ds = H5Dopen2(f, path, H5P_DEFAULT);
     if (ds < 0) return -1;
-    rc = H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
+    sp = H5Dget_space(ds);
+    rank = sp >= 0 ? H5Sget_simple_extent_ndims(sp) : -1;
+    if (rank == (cols > 0 ? 2 : 1)) {
+        H5Sget_simple_extent_dims(sp, d, NULL);
+        if (d[0] == (hsize_t)n && (cols <= 0 || d[1] == (hsize_t)cols))
+            rc = H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, out);
+    }
+    if (sp >= 0) H5Sclose(sp);
     H5Dclose(ds);
     return rc < 0 ? -1 : 0;
 }
+static int read_table(hid_t f, const char *path, hid_t mt, long n, void *out)
+{ return read_table_cols(f, path, mt, n, 0, out); }
 
 int cd_h5r_exists(const cd_h5r *r, const char *path)
 {
@@ -88,6 +124,15 @@ int cd_h5r_exists(const cd_h5r *r, const char *path)
     return e > 0;
 }
 
+/* 1 if the attribute holds one element (strings are written as scalars) */
+static int attr_is_scalar(hid_t a)
+{
+    hid_t sp = H5Aget_space(a);
+    hssize_t n = sp >= 0 ? H5Sget_simple_extent_npoints(sp) : -1;
+    if (sp >= 0) H5Sclose(sp);
+    return n == 1;
+}
+
 char *cd_h5r_attr_str(const cd_h5r *r, const char *obj, const char *name)
 {
     cd_h5_quiet q;
@@ -98,8 +143,9 @@ char *cd_h5r_attr_str(const cd_h5r *r, const char *obj, const char *name)
     a = H5Aopen_by_name(FID(r), obj, name, H5P_DEFAULT, H5P_DEFAULT);
     if (a >= 0) {
         t = H5Aget_type(a);
-        if (H5Tget_class(t) == H5T_STRING && !H5Tis_variable_str(t)) {
-            n = H5Tget_size(t);
+        n = H5Tget_size(t);
+        if (H5Tget_class(t) == H5T_STRING && H5Tis_variable_str(t) == 0 && n > 0 && n <= (size_t)CD_H5R_MAX_STR &&
+            attr_is_scalar(a)) {
             mt = H5Tcopy(t); /* keep the file's character set: HDF5 will not convert it */
             H5Tset_size(mt, n + 1);
             s = calloc(1, n + 2);
@@ -127,7 +173,8 @@ char *cd_h5r_text(const cd_h5r *r, const char *name)
     if (ds >= 0) {
         hid_t sp = H5Dget_space(ds);
         hssize_t n = H5Sget_simple_extent_npoints(sp);
-        s = calloc(1, (size_t)(n > 0 ? n : 0) + 1);
+        if (n < 0 || n > CD_H5R_MAX_TEXT) n = -1; /* refused below */
+        s = n >= 0 ? calloc(1, (size_t)n + 1) : NULL;
         if (s && n > 0 && H5Dread(ds, H5T_NATIVE_CHAR, H5S_ALL, H5S_ALL, H5P_DEFAULT, s) < 0) { free(s); s = NULL; }
         H5Sclose(sp);
         H5Dclose(ds);
@@ -164,7 +211,7 @@ static int attr_int_of(hid_t obj, const char *name, int *v)
     hid_t a = H5Aopen(obj, name, H5P_DEFAULT);
     int rc = -1;
     if (a >= 0) {
-        if (H5Aread(a, H5T_NATIVE_INT, v) >= 0) rc = 0;
+        if (attr_is_scalar(a) && H5Aread(a, H5T_NATIVE_INT, v) >= 0) rc = 0;
         H5Aclose(a);
     }
     return rc;
@@ -179,6 +226,12 @@ static int attr_str_of(hid_t obj, const char *name, char *out, size_t len)
     if (a < 0) return -1;
     t = H5Aget_type(a);
     n = H5Tget_size(t);
+    if (H5Tget_class(t) != H5T_STRING || H5Tis_variable_str(t) != 0 || n == 0 || n > (size_t)CD_H5R_MAX_STR ||
+        !attr_is_scalar(a)) {
+        H5Tclose(t);
+        H5Aclose(a);
+        return -1;
+    }
     mt = H5Tcopy(t);
     H5Tset_size(mt, n + 1);
     tmp = calloc(1, n + 2);
@@ -213,8 +266,13 @@ static herr_t sys_cb(hid_t g, const char *name, const H5L_info_t *info, void *op
             return -1;
         }
         s = it->r->sys + idx;
+        if (s->group[0]) { /* two groups claim one index */
+            H5Gclose(gs);
+            it->fail = 1;
+            return -1;
+        }
     }
-    snprintf(s->group, sizeof s->group, "%s", name);
+    snprintf(s->group, sizeof s->group, "%s", name[0] ? name : "?");
     if (attr_str_of(gs, "name", s->name, sizeof s->name) < 0) snprintf(s->name, sizeof s->name, "%s", name);
     attr_str_of(gs, "base_type", bt, sizeof bt);
     s->base_free = strcmp(bt, "free") == 0;
@@ -254,7 +312,10 @@ static int read_static(cd_h5r *r)
         hsize_t idx = 0;
         H5G_info_t gi;
         if (g < 0) return -1;
-        H5Gget_info(g, &gi);
+        if (H5Gget_info(g, &gi) < 0 || gi.nlinks > (hsize_t)CD_H5R_MAX_TABLE) {
+            H5Gclose(g);
+            return -1;
+        }
         r->nsys = (int)gi.nlinks;
         r->sys = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *r->sys);
         if (!r->sys) { H5Gclose(g); return -1; }
@@ -315,7 +376,7 @@ static int read_static(cd_h5r *r)
     r->nvert = n > 0 ? (int)n : 0;
     r->vert = calloc((size_t)(r->nvert ? r->nvert : 1) * 3, sizeof(double));
     if (!r->vert) return -1;
-    if (r->nvert > 0) rc |= read_table(f, "/model/vertices", H5T_NATIVE_DOUBLE, r->nvert, r->vert);
+    if (r->nvert > 0) rc |= read_table_cols(f, "/model/vertices", H5T_NATIVE_DOUBLE, r->nvert, 3, r->vert);
     /* slots */
     n = table_rows(f, "/contacts/slots");
     if (n < 0) return -1;
@@ -333,6 +394,49 @@ static int read_static(cd_h5r *r)
     rc |= read_table(f, "/contacts/slots", ct, n, r->slot);
     H5Tclose(ct);
     return rc ? -1 : 0;
+}
+
+/* The static tables hang together: sizes as the root attributes state
+ * them, every index inside the table it points into, the systems' bodies
+ * contiguous. Returns NULL, or what is wrong. */
+static const char *validate_static(cd_h5r *r)
+{
+    long long a;
+    int s, b, k, next = 0;
+#define SAME(attr, v) (cd_h5r_attr_i64(r, "/", attr, &a) == 0 && a == (long long)(v))
+    if (!SAME("nsys", r->nsys) || !SAME("nbody", r->nbody) || !SAME("ncheckpoint", r->ncp) ||
+        !SAME("nshape", r->nshape) || !SAME("nslot", r->nslot))
+        return "the sizes of the model tables differ from the root attributes nsys, nbody, ncheckpoint, nshape, nslot";
+#undef SAME
+    for (s = 0; s < r->nsys; s++) {
+        const cd_h5r_sys *y = r->sys + s;
+        if (y->body_first != next || y->nbody < 1 || y->nbody > r->nbody - next || y->njoint != y->nbody - 1)
+            return "a system's body_first, nbody or njoint does not match the body table";
+        next += y->nbody;
+    }
+    if (next != r->nbody) return "the systems' bodies do not add up to the body table";
+    for (b = 0; b < r->nbody; b++) {
+        const cd_h5r_body *y = r->body + b;
+        if (y->system < 0 || y->system >= r->nsys || y->parent < -1 || y->parent >= b ||
+            (y->parent >= 0 && r->body[y->parent].system != y->system) ||
+            (y->parent < 0) != (b == r->sys[y->system].body_first))
+            return "a body's system or parent index is out of range";
+    }
+    for (k = 0; k < r->ncp; k++)
+        if (r->cp[k].body < 0 || r->cp[k].body >= r->nbody) return "a check point's body index is out of range";
+    for (k = 0; k < r->nshape; k++) {
+        const cd_h5r_shape *y = r->shape + k;
+        if (y->body < 0 || y->body >= r->nbody || y->type < 0 || y->type >= CD_SHAPE_NTYPES || y->vert_adr < 0 ||
+            y->vert_num < 0 || y->vert_num > r->nvert - y->vert_adr)
+            return "a shape's body, type or vertex range is out of range";
+    }
+    for (k = 0; k < r->nslot; k++) {
+        const cd_h5r_slot *y = r->slot + k;
+        if (y->checkpoint < 0 || y->checkpoint >= r->ncp || y->shape < 0 || y->shape >= r->nshape || y->body_a < 0 ||
+            y->body_a >= r->nbody || y->body_b < 0 || y->body_b >= r->nbody)
+            return "a contact slot's check point, shape or body index is out of range";
+    }
+    return NULL;
 }
 
 /* Why HDF5 would not open path. The one damage a capdyn run leaves is a
@@ -388,7 +492,18 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
     cd_h5_quiet_begin(&q);
     fapl = H5Pcreate(H5P_FILE_ACCESS);
     H5Pset_file_locking(fapl, 0, 1);
-    f = H5Fopen(path, H5F_ACC_RDONLY, fapl);
+    /* SWMR read first: HDF5 then reads past the end-of-allocation address
+     * that the superblock records. A run killed inside a commit may leave
+     * a chunk index already pointing at chunks written beyond the address
+     * its superblock (flushed last) records; a plain open refuses to read
+     * them ("addr overflow"), although they are complete on disk. Files of
+     * an older format do not open that way: then a plain open. */
+    /* one attempt per metadata read: SWMR readers retry a read whose
+     * checksum fails (by default 100 times, sleeping in between), which
+     * made a damaged file take many minutes to refuse */
+    H5Pset_metadata_read_attempts(fapl, 1);
+    f = H5Fopen(path, H5F_ACC_RDONLY | H5F_ACC_SWMR_READ, fapl);
+    if (f < 0) f = H5Fopen(path, H5F_ACC_RDONLY, fapl);
     H5Pclose(fapl);
     cd_h5_quiet_end(&q);
     if (f < 0) {
@@ -411,13 +526,13 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
     }
     free(fmt);
     cd_h5_quiet_begin(&q);
-    rows = table_rows(f, "/time");
+    rows = table_rows_max(f, "/time", CD_H5R_MAX_ROWS);
     cd_h5_quiet_end(&q);
     r->nrows = rows > 0 ? rows : 0;
     r->n = r->nrows;
     if (cd_h5r_attr_i64(r, "/", "committed_samples", &c) == 0 && c >= 0 && c < r->n) r->n = (long)c;
     cd_h5_quiet_begin(&q);
-    rows = table_rows(f, "/events");
+    rows = table_rows_max(f, "/events", CD_H5R_MAX_ROWS);
     cd_h5_quiet_end(&q);
     r->nev = rows > 0 ? rows : 0;
     c = -1;
@@ -433,17 +548,74 @@ cd_h5r *cd_h5r_open(const char *path, cd_error *err)
         seterr(err, CD_EIO, "'%s': the model tables (/systems, /model, /contacts/slots) are missing or damaged", path);
         return NULL;
     }
+    {
+        const char *why = validate_static(r);
+        if (why) {
+            cd_h5r_close(r);
+            seterr(err, CD_EIO, "'%s': a damaged results file: %s", path, why);
+            return NULL;
+        }
+    }
     return r;
+}
+
+/* The shape a series at path must have (h5_schema.h and the static
+ * tables): its rank and tail dimensions; -1 if path is no known series. */
+static int expected_shape(const cd_h5r *r, const char *path, int *rank, hsize_t tail[2], int *type)
+{
+    const char *name = NULL, *slash;
+    cd_h5_group g;
+    int sys = -1, i, nt;
+    long t[2];
+    if (!strncmp(path, "/systems/", 9)) {
+        char grp[128];
+        size_t n;
+        slash = strchr(path + 9, '/');
+        n = slash ? (size_t)(slash - (path + 9)) : 0;
+        if (!slash || n >= sizeof grp) return -1;
+        memcpy(grp, path + 9, n);
+        grp[n] = 0;
+        for (i = 0; i < r->nsys; i++)
+            if (!strcmp(r->sys[i].group, grp)) sys = i;
+        if (sys < 0) return -1;
+        g = CD_G_SYSTEM;
+        name = slash + 1;
+    } else if (!strncmp(path, "/contacts/", 10)) {
+        g = CD_G_CONTACTS;
+        name = path + 10;
+    } else if (!strncmp(path, "/diagnostics/", 13)) {
+        g = CD_G_DIAGNOSTICS;
+        name = path + 13;
+    } else {
+        g = CD_G_ROOT;
+        name = path + 1;
+    }
+    for (i = 0; i < CD_H5_NSERIES_DEFS; i++) {
+        const cd_h5_series_def *def = cd_h5_series_defs + i;
+        if (def->group != g || strcmp(def->name, name) != 0) continue;
+        cd_h5_shape_rowlen(def->shape, r->nsys, r->nslot, sys >= 0 ? r->sys[sys].njoint : 0,
+                           sys >= 0 ? r->sys[sys].nbody : 0, &nt, t);
+        *rank = 1 + nt;
+        tail[0] = (hsize_t)t[0];
+        tail[1] = (hsize_t)t[1];
+        *type = def->type;
+        return 0;
+    }
+    return -1;
 }
 
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err)
 {
     cd_h5_quiet q;
-    hid_t ds, fs, ms;
-    hsize_t d[4] = {0, 0, 0, 0}, off[4] = {0, 0, 0, 0}, cnt[4];
-    int rank, i;
+    hid_t ds, fs, ms, ft;
+    hsize_t d[3] = {0, 0, 0}, off[3] = {0, 0, 0}, cnt[3], tail[2] = {0, 0};
+    int rank, i, erank = 0, etype = 0, ok;
     size_t rl = 1;
     double *v = NULL;
+    if (expected_shape(r, path, &erank, tail, &etype) < 0) {
+        seterr(err, CD_EIO, "%s is not a time series of the results format", path);
+        return NULL;
+    }
     cd_h5_quiet_begin(&q);
     ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
     if (ds < 0) {
@@ -451,9 +623,25 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
         seterr(err, CD_EIO, "no dataset %s in the results file", path);
         return NULL;
     }
+    /* the shape and type the schema and the model tables say, before any
+     * size from the file is used */
     fs = H5Dget_space(ds);
-    rank = H5Sget_simple_extent_dims(fs, d, NULL);
-    if (rank < 1 || rank > 4 || (long)d[0] < r->n) {
+    ft = H5Dget_type(ds);
+    rank = fs >= 0 ? H5Sget_simple_extent_ndims(fs) : -1;
+    ok = rank == erank && ft >= 0 && H5Tget_size(ft) == (etype == CD_H5_F64 || etype == CD_H5_I64 ? 8u : 1u) &&
+         H5Tget_class(ft) == (etype == CD_H5_F64 ? H5T_FLOAT : H5T_INTEGER);
+    if (ok) H5Sget_simple_extent_dims(fs, d, NULL);
+    for (i = 1; ok && i < rank; i++) ok = d[i] == tail[i - 1];
+    if (ft >= 0) H5Tclose(ft);
+    if (!ok) {
+        H5Sclose(fs);
+        H5Dclose(ds);
+        cd_h5_quiet_end(&q);
+        seterr(err, CD_EIO, "dataset %s has another shape or type than the model tables and the format say "
+               "(a damaged file)", path);
+        return NULL;
+    }
+    if ((long)d[0] < r->n) {
         H5Sclose(fs);
         H5Dclose(ds);
         cd_h5_quiet_end(&q);
@@ -533,9 +721,9 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
     H5Tinsert(ct, "fn", HOFFSET(cd_event, fn), H5T_NATIVE_DOUBLE);
     H5Tinsert(ct, "ft", HOFFSET(cd_event, ft), H5T_NATIVE_DOUBLE);
     fs = H5Dget_space(ds);
-    H5Sselect_hyperslab(fs, H5S_SELECT_SET, &off, NULL, &cnt, NULL);
     ms = H5Screate_simple(1, &cnt, NULL);
-    rc = H5Dread(ds, ct, ms, fs, H5P_DEFAULT, ev);
+    rc = H5Sget_simple_extent_ndims(fs) == 1 ? H5Sselect_hyperslab(fs, H5S_SELECT_SET, &off, NULL, &cnt, NULL) : -1;
+    if (rc >= 0) rc = H5Dread(ds, ct, ms, fs, H5P_DEFAULT, ev);
     H5Sclose(ms);
     H5Sclose(fs);
     H5Tclose(ct);

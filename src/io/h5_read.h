@@ -3,7 +3,13 @@
  *
  * Readers trust only the committed rows: n = min(/committed_samples, rows on
  * disk), and the same for events (/committed_events). Everything returned is
- * owned by the reader (freed by cd_h5r_close) unless said otherwise. */
+ * owned by the reader (freed by cd_h5r_close) unless said otherwise.
+ *
+ * Files are untrusted: every size and index read from a file is checked
+ * before use (a damaged file gives NULL and a message), but libhdf5 itself
+ * may still crash on a damaged file; read untrusted files in a child process
+ * as `capdyn info`/`export` do (docs/reliability.md, "Untrusted results
+ * files"). */
 #ifndef CD_H5_READ_H
 #define CD_H5_READ_H
 
@@ -56,7 +62,9 @@ typedef struct {
 } cd_h5r;
 
 /* Opens a results file read-only (without file locking, so a file that a
- * run is still writing can be inspected) and reads the static tables.
+ * run is still writing can be inspected; for SWMR reading when the format
+ * allows it, so that chunks a killed commit wrote past the superblock's
+ * end-of-allocation are read) and reads and checks the static tables.
  * Returns NULL with err filled (CD_EIO) if it is not a readable capdyn file. */
 cd_h5r *cd_h5r_open(const char *path, cd_error *err);
 void cd_h5r_close(cd_h5r *r);
@@ -64,7 +72,9 @@ void cd_h5r_close(cd_h5r *r);
 /* 1 if the object (dataset or group) exists. */
 int cd_h5r_exists(const cd_h5r *r, const char *path);
 /* The first r->n rows of a time series as doubles (integers converted),
- * malloc'ed (caller frees); *rowlen = elements per row. NULL if missing. */
+ * malloc'ed (caller frees); *rowlen = elements per row. NULL (err filled)
+ * if missing, or if its shape or type is not what the schema
+ * (src/io/h5_schema.h) and the model tables say. */
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err);
 /* Attributes of an object ("/" for the file). The string is malloc'ed
  * (caller frees); NULL if missing. The numeric readers return 0 on success,
