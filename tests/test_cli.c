@@ -291,7 +291,7 @@ Test(cli, export_columns_parse)
     EXPORT(61, 8, "contacts", "--active");
     EXPORT(61, 19, "slot", "0");
     EXPORT(1, 10, "slots");
-    EXPORT(2, 11, "events");
+    EXPORT(2, 13, "events"); /* ... body_a body_b owner_kind owner */
     EXPORT(61, 22, "diagnostics");
     EXPORT(61, 22, "diagnostics", "ball");
     EXPORT(3, 10, "checkpoints", "--frames", "3");

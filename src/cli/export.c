@@ -34,8 +34,8 @@ static const char *export_help =
     "                       vtx vty vtz vt mode (all of one slot)\n"
     "  slots                the static slot table: slot checkpoint body_a body_b\n"
     "                       shape shape_type cpx cpy cpz radius\n"
-    "  events               t kind kind_name slot mode_from mode_to x fn ft\n"
-    "                       body_a body_b\n"
+    "  events               t kind kind_name slot mode_from mode_to x fn ft body_a body_b\n"
+    "                       owner_kind owner (slot, joint, actuator, user, finger)\n"
     "  diagnostics [SYSTEM] t ke pe e de px py pz dp lx ly lz dl cx cy cz\n"
     "                       h nrhs nsteps nrejected nevents wall; totals over all\n"
     "                       systems, or one system's; l about the CoM; d* = change\n"
@@ -345,7 +345,7 @@ static int ex_events(exp_ctx *c)
         cli_error("%s", err.msg);
         return CLI_FAIL;
     }
-    puts("# t kind kind_name slot mode_from mode_to x fn ft body_a body_b");
+    puts("# t kind kind_name slot mode_from mode_to x fn ft body_a body_b owner_kind owner");
     printf("# %ld events; kinds:", n);
     for (i = 0; i < CD_EV_NKINDS; i++) printf(" %ld %s", i, cd_event_kind_name((cd_event_kind)i));
     puts("; modes 0 open 1 stick 2 slip; x [m], fn and ft [N] just before the switch");
@@ -363,7 +363,7 @@ static int ex_events(exp_ctx *c)
         putchar(' ');
         if (e->body_b >= 0 && e->body_b < r->nbody) token(r->body[e->body_b].full_name);
         else putchar('-');
-        putchar('\n');
+        printf(" %s %d\n", cd_owner_kind_name((cd_owner_kind)e->owner_kind), e->owner);
     }
     free(ev);
     return CLI_OK;

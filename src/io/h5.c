@@ -136,7 +136,7 @@ struct cd_h5_writer {
     int s[CD_SER_COUNT];          /* series index of each id outside /systems (-1: none) */
     sys_series *s_sys;
     /* events */
-    hid_t ev_dset, ev_mtype, ev_ftype, kind_enum, mode_enum;
+    hid_t ev_dset, ev_mtype, ev_ftype, kind_enum, mode_enum, owner_enum;
     cd_event *evbuf;
     long ev_nbuf, ev_capbuf;
     long long ev_written;
@@ -793,6 +793,7 @@ static void writer_free(cd_h5_writer *w)
     if (w->ev_ftype >= 0) H5Tclose(w->ev_ftype);
     if (w->kind_enum >= 0) H5Tclose(w->kind_enum);
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
+    if (w->owner_enum >= 0) H5Tclose(w->owner_enum);
     if (w->file >= 0) H5Fclose(w->file);
     if (w->lock_fd >= 0) close(w->lock_fd);
     free(w->path);
@@ -817,7 +818,12 @@ static int create_event_types(cd_h5_writer *w)
     hid_t ct;
     w->kind_enum = H5Tenum_create(H5T_NATIVE_INT);
     w->mode_enum = H5Tenum_create(H5T_NATIVE_INT);
-    if (w->kind_enum < 0 || w->mode_enum < 0) return -1;
+    w->owner_enum = H5Tenum_create(H5T_NATIVE_INT);
+    if (w->kind_enum < 0 || w->mode_enum < 0 || w->owner_enum < 0) return -1;
+    for (k = 0; k < CD_OWNER_NKINDS; k++) {
+        v = k;
+        H5Tenum_insert(w->owner_enum, cd_owner_kind_name((cd_owner_kind)k), &v);
+    }
     for (k = 0; k < CD_EV_NKINDS; k++) {
         v = k;
         H5Tenum_insert(w->kind_enum, cd_event_kind_name((cd_event_kind)k), &v);
@@ -838,6 +844,8 @@ static int create_event_types(cd_h5_writer *w)
     ins(ct, "x", HOFFSET(cd_event, x), H5T_NATIVE_DOUBLE);
     ins(ct, "fn", HOFFSET(cd_event, fn), H5T_NATIVE_DOUBLE);
     ins(ct, "ft", HOFFSET(cd_event, ft), H5T_NATIVE_DOUBLE);
+    ins(ct, "owner_kind", HOFFSET(cd_event, owner_kind), w->owner_enum);
+    ins(ct, "owner", HOFFSET(cd_event, owner), H5T_NATIVE_INT);
     w->ev_mtype = ct;
     w->ev_ftype = H5Tcopy(ct);
     if (w->ev_ftype < 0) return -1;
@@ -1191,7 +1199,7 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         seterr(err, CD_ENOMEM, "out of memory");
         return NULL;
     }
-    w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = -1;
+    w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = w->owner_enum = -1;
     w->lock_fd = -1;
     w->space_check = 1;
     w->path = malloc(strlen(path) + 1);
@@ -1342,8 +1350,14 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
             memset(av, 0, 3 * sizeof(double));
         }
         if (ss->idx[CD_SER_Q] >= 0) {
-            memcpy(row_f64(w, ss->idx[CD_SER_Q]), x.q, (size_t)x.njoint * sizeof(double));
-            memcpy(row_f64(w, ss->idx[CD_SER_QD]), x.qd, (size_t)x.njoint * sizeof(double));
+            int va = m->sys_v_adr[s] + (x.pos ? 6 : 0); /* the joints' generalized forces */
+            size_t nj = (size_t)x.njoint * sizeof(double);
+            memcpy(row_f64(w, ss->idx[CD_SER_Q]), x.q, nj);
+            memcpy(row_f64(w, ss->idx[CD_SER_QD]), x.qd, nj);
+            memcpy(row_f64(w, ss->idx[CD_SER_TAU]), d->tau + va, nj);
+            memcpy(row_f64(w, ss->idx[CD_SER_TAU_ACTUATOR]), d->qfrc_actuator + va, nj);
+            memcpy(row_f64(w, ss->idx[CD_SER_TAU_PASSIVE]), d->qfrc_passive + va, nj);
+            memcpy(row_f64(w, ss->idx[CD_SER_TAU_APPLIED]), d->qfrc_applied + va, nj);
         }
         {
             double *bx = row_f64(w, ss->idx[CD_SER_BODY_X]), *bc = row_f64(w, ss->idx[CD_SER_BODY_C]), *bq = row_f64(w, ss->idx[CD_SER_BODY_QUAT]);

@@ -675,7 +675,7 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
 cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
 {
     cd_h5_quiet q;
-    hid_t ds, fs, ms, ft, ct, kt, mt;
+    hid_t ds, fs, ms, ft, ct, kt, mt, ot;
     hsize_t off = 0, cnt = (hsize_t)r->nev;
     cd_event *ev = calloc((size_t)(r->nev ? r->nev : 1), sizeof *ev);
     herr_t rc = 0;
@@ -701,6 +701,8 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
     kt = idx >= 0 ? H5Tget_member_type(ft, (unsigned)idx) : -1;
     idx = H5Tget_member_index(ft, "mode_from");
     mt = idx >= 0 ? H5Tget_member_type(ft, (unsigned)idx) : -1;
+    idx = H5Tget_member_index(ft, "owner_kind");
+    ot = idx >= 0 ? H5Tget_member_type(ft, (unsigned)idx) : -1;
     ct = H5Tcreate(H5T_COMPOUND, sizeof(cd_event));
     H5Tinsert(ct, "t", HOFFSET(cd_event, t), H5T_NATIVE_DOUBLE);
     if (kt >= 0) {
@@ -720,6 +722,12 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
     H5Tinsert(ct, "x", HOFFSET(cd_event, x), H5T_NATIVE_DOUBLE);
     H5Tinsert(ct, "fn", HOFFSET(cd_event, fn), H5T_NATIVE_DOUBLE);
     H5Tinsert(ct, "ft", HOFFSET(cd_event, ft), H5T_NATIVE_DOUBLE);
+    if (ot >= 0) { /* files before the owner fields: every event was a slot's */
+        hid_t not_ = H5Tget_native_type(ot, H5T_DIR_DEFAULT);
+        H5Tinsert(ct, "owner_kind", HOFFSET(cd_event, owner_kind), not_);
+        H5Tinsert(ct, "owner", HOFFSET(cd_event, owner), H5T_NATIVE_INT);
+        H5Tclose(not_);
+    }
     fs = H5Dget_space(ds);
     ms = H5Screate_simple(1, &cnt, NULL);
     rc = H5Sget_simple_extent_ndims(fs) == 1 ? H5Sselect_hyperslab(fs, H5S_SELECT_SET, &off, NULL, &cnt, NULL) : -1;
@@ -729,6 +737,7 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
     H5Tclose(ct);
     if (kt >= 0) H5Tclose(kt);
     if (mt >= 0) H5Tclose(mt);
+    if (ot >= 0) H5Tclose(ot);
     H5Tclose(ft);
     H5Dclose(ds);
     cd_h5_quiet_end(&q);
@@ -736,6 +745,10 @@ cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err)
         free(ev);
         seterr(err, CD_EIO, "reading /events failed");
         return NULL;
+    }
+    if (ot < 0) {
+        long e;
+        for (e = 0; e < r->nev; e++) { ev[e].owner_kind = CD_OWNER_SLOT; ev[e].owner = ev[e].slot; }
     }
     *n = r->nev;
     return ev;

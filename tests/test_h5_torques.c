@@ -1,0 +1,53 @@
+/* Results record the applied joint torques and the generalized inputs as
+ * series (issue 7): /systems/<s>/tau, tau_actuator, tau_passive, tau_applied.
+ * Checked on the paper's Fig. 3 mechanism, whose rear spring is a passive
+ * joint spring (K_a = 2500 N/m, c = 0.5 N s/m): at every sample the recorded
+ * passive force is -K_a q - c qdot of the recorded state, the actuators give
+ * nothing, and the total is the sum. */
+#include <criterion/criterion.h>
+#include <hdf5.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+#include "h5_test_util.h"
+
+Test(h5_torques, joint_torque_series_match_the_spring_law_of_the_recorded_state)
+{
+    const char *bin = getenv("CAPDYN_BIN"), *root = getenv("CAPDYN_ROOT");
+    char dir[] = "/tmp/capdyn_tau_XXXXXX", cmd[2048], h5[512];
+    size_t n, n2, i;
+    double *q, *qd, *tau, *ta, *tp, *tap, worst = 0, scale = 0;
+    hid_t f;
+    cr_assert(bin && root, "CAPDYN_BIN and CAPDYN_ROOT");
+    cr_assert(mkdtemp(dir));
+    snprintf(h5, sizeof h5, "%s/fig3.h5", dir);
+    snprintf(cmd, sizeof cmd, "'%s' run '%s/scenarios/paper_fig3_impact.toml' -o '%s' -q --set simulation.duration=0.3",
+             bin, root, h5);
+    cr_assert_eq(system(cmd), 0, "%s", cmd);
+    f = H5Fopen(h5, H5F_ACC_RDONLY, H5P_DEFAULT);
+    cr_assert(f >= 0);
+    q = read_all(f, "/systems/carrier/q", &n);
+    qd = read_all(f, "/systems/carrier/qd", &n2);
+    tau = read_all(f, "/systems/carrier/tau", &n2);
+    ta = read_all(f, "/systems/carrier/tau_actuator", &n2);
+    tp = read_all(f, "/systems/carrier/tau_passive", &n2);
+    tap = read_all(f, "/systems/carrier/tau_applied", &n2);
+    cr_assert(q && qd && tau && ta && tp && tap && n2 == n && n > 100, "series (%zu samples)", n);
+    for (i = 0; i < n; i++) {
+        double want = -2500.0 * q[i] - 0.5 * qd[i];
+        if (fabs(tp[i] - want) > worst) worst = fabs(tp[i] - want);
+        if (fabs(want) > scale) scale = fabs(want);
+        cr_expect_eq(ta[i], 0.0);
+        cr_expect_eq(tap[i], 0.0);
+        cr_expect_eq(tau[i], ta[i] + tp[i] + tap[i]);
+    }
+    cr_log_info("tau_passive vs -K q - c qd: worst %.3e N of %.3e N", worst, scale);
+    cr_expect_gt(scale, 1.0, "the spring is loaded during the impact (%.3g N)", scale);
+    cr_expect_leq(worst, 1e-12 * scale, "worst %.3e", worst);
+    free(q); free(qd); free(tau); free(ta); free(tp); free(tap);
+    H5Fclose(f);
+    unlink(h5);
+    rmdir(dir);
+}
