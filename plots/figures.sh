@@ -54,6 +54,19 @@ for ext in png svg; do
 done
 gnuplot -c plots/animation.gp "$D/fig5_outline_anim.dat" "$D/fig5_checkpoints_anim.dat" "$OUT/fig5_grasp.gif" "Fig. 5 envelope grasp" 4
 
+# ---- Figs. 9-11 and TAKO: grippers (docs/grippers.md), clutch events marked ----
+for g in space_gripper_cylinder space_gripper_irregular space_gripper_handrail tako_centred tako_off_centre soft_wrap; do
+    run "$g" "scenarios/$g.toml"
+    "$CAPDYN" export "$D/$g.h5" outline --at 0,0.1,0.3,end > "$D/${g}_outline.dat"
+    "$CAPDYN" export "$D/$g.h5" checkpoints --at 0,0.1,0.3,end > "$D/${g}_checkpoints.dat"
+    for ext in png svg; do
+        gnuplot -c plots/force_profile.gp "$D/${g}_contacts.dat" "$D/${g}_events.dat" "$OUT/${g}_force.$ext" \
+            "$g: contact forces (clutch events marked)"
+        gnuplot -c plots/snapshots.gp "$D/${g}_outline.dat" "$D/${g}_checkpoints.dat" "$OUT/${g}_snapshots.$ext" \
+            "$g: t = 0, 0.1, 0.3 s and the end (grey open, green stick, red slip)" 4
+    done
+done
+
 echo "figures written to $OUT/:"
 ls -1 "$OUT" | grep -v '^data$' | sed 's/^/  /'
 echo "(results and exported columns in $D/)"

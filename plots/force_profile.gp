@@ -67,7 +67,8 @@ set format x ""
 plot contacts using 1:($4 > 0 ? FN : 0) with filledcurves y1=0 lc rgb "#e04040" title "slip phase", \
      for [j=0:nslot-1] contacts using 1:(column(6+3*j)) with lines lw 1.5 title slotlabel(j), \
      (nev > 0 ? events : NaN) using 1:($2 == 0 ? 0.975*FN : 1/0) with points pt 9 ps 0.8 lc rgb "#007000" title "onset", \
-     (nev > 0 ? events : NaN) using 1:($2 == 1 ? 0.935*FN : 1/0) with points pt 11 ps 0.8 lc rgb "#000000" title "separation"
+     (nev > 0 ? events : NaN) using 1:($2 == 1 ? 0.935*FN : 1/0) with points pt 11 ps 0.8 lc rgb "#000000" title "separation", \
+     (nev > 0 ? events : NaN) using 1:($2 == 10 ? 0.895*FN : 1/0) with impulses lw 2 lc rgb "#8000a0" title "clutch"
 
 set ylabel "tangential force |f_t| [N]"
 set yrange [0:FT]
