@@ -51,3 +51,46 @@ Test(h5_torques, joint_torque_series_match_the_spring_law_of_the_recorded_state)
     unlink(h5);
     rmdir(dir);
 }
+
+Test(h5_torques, actuator_series_and_the_transmission_they_drive)
+{
+    /* tests/data/scenarios/joints_transmission.toml: actuator 0 drives
+     * finger/l1 (ratio 1), actuator 1 ("tendon") drives l1 and l2 with ratios
+     * 2 and 1. The recorded joint torques of the actuators are the recorded
+     * actuator torques through the ratios, at every sample (1e-12); no
+     * control input was given (ctrl = 0). */
+    const char *bin = getenv("CAPDYN_BIN"), *root = getenv("CAPDYN_ROOT");
+    char dir[] = "/tmp/capdyn_act_XXXXXX", cmd[2048], h5[512];
+    size_t n, n2, i;
+    double *ctrl, *force, *ta, worst = 0;
+    hid_t f;
+    cr_assert(bin && root);
+    cr_assert(mkdtemp(dir));
+    snprintf(h5, sizeof h5, "%s/jt.h5", dir);
+    snprintf(cmd, sizeof cmd, "'%s' run '%s/tests/data/scenarios/joints_transmission.toml' -o '%s' -q", bin, root, h5);
+    cr_assert_eq(system(cmd), 0, "%s", cmd);
+    f = H5Fopen(h5, H5F_ACC_RDONLY, H5P_DEFAULT);
+    cr_assert(f >= 0);
+    {
+        hid_t g = H5Gopen2(f, "/actuators", H5P_DEFAULT);
+        cr_assert(g >= 0, "/actuators");
+        cr_expect_eq(attr_ll(g, "nactuator"), 2);
+        H5Gclose(g);
+    }
+    ctrl = read_all(f, "/actuators/ctrl", &n);
+    force = read_all(f, "/actuators/force", &n2);
+    cr_assert(ctrl && force && n == n2 && n % 2 == 0, "actuator series");
+    ta = read_all(f, "/systems/finger/tau_actuator", &n2);
+    cr_assert(ta && n2 == (n / 2) * 4, "tau_actuator (%zu values)", n2);
+    for (i = 0; i < n / 2; i++) {
+        double l1 = force[2 * i] + 2.0 * force[2 * i + 1], l2 = force[2 * i + 1];
+        if (fabs(ta[4 * i] - l1) > worst) worst = fabs(ta[4 * i] - l1);
+        if (fabs(ta[4 * i + 1] - l2) > worst) worst = fabs(ta[4 * i + 1] - l2);
+        cr_expect_eq(ctrl[2 * i], 0.0);
+    }
+    cr_expect_leq(worst, 1e-12, "transmission of the recorded actuator torques: worst %.3e", worst);
+    free(ctrl); free(force); free(ta);
+    H5Fclose(f);
+    unlink(h5);
+    rmdir(dir);
+}

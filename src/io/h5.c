@@ -864,7 +864,7 @@ static int add_group_series(cd_h5_writer *w, hid_t loc, cd_h5_group g, const cd_
     for (k = 0; k < CD_SER_COUNT; k++) {
         const cd_h5_series_def *def = cd_h5_series_defs + k;
         if (def->group != g) continue;
-        cd_h5_shape_rowlen(def->shape, m->nsys, m->nslot, njoint, nbody, &nt, t);
+        cd_h5_shape_rowlen(def->shape, m->nsys, m->nslot, njoint, nbody, m->nu, &nt, t);
         idx[k] = -1;
         if (nt > 0 && t[0] == 0) continue; /* q and qd of a system without joints */
         idx[k] = add_series(w, loc, def->name, def->type, nt, (hsize_t)t[0], (hsize_t)t[1], def->units,
@@ -941,6 +941,19 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
         attr_strv(w->ev_dset, "kind_names", CD_EV_NKINDS, kn, 24);
         attr_i64(w->ev_dset, "lost", 0);
         attr_str(w->ev_dset, "units", "t [s], x [m], fn [N], ft [N]");
+    }
+    /* actuators: their inputs and torques (only when the model has some) */
+    if (m->nu > 0) {
+        hid_t ga = H5Gcreate2(w->file, "actuators", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
+        const char **an = malloc((size_t)m->nu * sizeof *an);
+        if (ga < 0 || !an) { free(an); if (ga >= 0) H5Gclose(ga); return -1; }
+        attr_int(ga, "nactuator", m->nu);
+        for (k = 0; k < m->nu; k++) an[k] = m->act_name[k] ? m->act_name[k] : "";
+        attr_strv(ga, "names", m->nu, an, 128);
+        free(an);
+        ok = add_group_series(w, ga, CD_G_ACTUATORS, m, 0, 0, w->s) == 0;
+        H5Gclose(ga);
+        if (!ok) return -1;
     }
     /* diagnostics */
     gd = H5Gcreate2(w->file, "diagnostics", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
@@ -1368,6 +1381,12 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
                 cd_m3_to_quat(bq + 4 * i, d->body_R + 9 * b);
             }
         }
+    }
+    if (m->nu > 0) {
+        size_t nb = (size_t)m->nu * sizeof(double);
+        memcpy(row_f64(w, w->s[CD_SER_CTRL]), d->ctrl, nb);
+        memcpy(row_f64(w, w->s[CD_SER_ACT_FORCE]), d->act_force, nb);
+        memcpy(row_f64(w, w->s[CD_SER_ACT_VELOCITY]), d->act_velocity, nb);
     }
     if (m->nslot > 0) {
         size_t n1 = (size_t)m->nslot * sizeof(double), n3 = 3 * n1;

@@ -586,6 +586,9 @@ static int expected_shape(const cd_h5r *r, const char *path, int *rank, hsize_t 
     } else if (!strncmp(path, "/diagnostics/", 13)) {
         g = CD_G_DIAGNOSTICS;
         name = path + 13;
+    } else if (!strncmp(path, "/actuators/", 11)) {
+        g = CD_G_ACTUATORS;
+        name = path + 11;
     } else {
         g = CD_G_ROOT;
         name = path + 1;
@@ -593,8 +596,11 @@ static int expected_shape(const cd_h5r *r, const char *path, int *rank, hsize_t 
     for (i = 0; i < CD_H5_NSERIES_DEFS; i++) {
         const cd_h5_series_def *def = cd_h5_series_defs + i;
         if (def->group != g || strcmp(def->name, name) != 0) continue;
+        long long nu = 0;
+        if (def->shape == CD_SH_NU && (cd_h5r_attr_i64(r, "/actuators", "nactuator", &nu) != 0 || nu < 1 || nu > 1000000))
+            return -1;
         cd_h5_shape_rowlen(def->shape, r->nsys, r->nslot, sys >= 0 ? r->sys[sys].njoint : 0,
-                           sys >= 0 ? r->sys[sys].nbody : 0, &nt, t);
+                           sys >= 0 ? r->sys[sys].nbody : 0, (long)nu, &nt, t);
         *rank = 1 + nt;
         tail[0] = (hsize_t)t[0];
         tail[1] = (hsize_t)t[1];

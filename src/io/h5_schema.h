@@ -17,13 +17,14 @@ typedef enum {
     CD_SH_NSLOT3,    /* nslot x 3 */
     CD_SH_NJOINT,    /* the system's joints */
     CD_SH_NBODY3,    /* the system's bodies x 3 */
-    CD_SH_NBODY4     /* the system's bodies x 4 */
+    CD_SH_NBODY4,    /* the system's bodies x 4 */
+    CD_SH_NU         /* actuators */
 } cd_h5_shape;
 
 enum { CD_H5_F64 = 0, CD_H5_I64, CD_H5_I8 };
 
 /* where a series lives: "/" + name, "/systems/<group>/" + name, ... */
-typedef enum { CD_G_ROOT = 0, CD_G_SYSTEM, CD_G_CONTACTS, CD_G_DIAGNOSTICS } cd_h5_group;
+typedef enum { CD_G_ROOT = 0, CD_G_SYSTEM, CD_G_CONTACTS, CD_G_DIAGNOSTICS, CD_G_ACTUATORS } cd_h5_group;
 
 typedef struct {
     cd_h5_group group;
@@ -69,6 +70,9 @@ typedef enum {
     CD_SER_NREJECTED,
     CD_SER_NEVENTS,
     CD_SER_WALL_TIME,
+    CD_SER_CTRL,
+    CD_SER_ACT_FORCE,
+    CD_SER_ACT_VELOCITY,
     CD_SER_COUNT
 } cd_h5_series_id;
 
@@ -115,13 +119,18 @@ static const cd_h5_series_def cd_h5_series_defs[CD_SER_COUNT] = {
     [CD_SER_NREJECTED] = {CD_G_DIAGNOSTICS, "nrejected", CD_H5_I64, CD_SH_ONE, "1", "rejected trial steps so far"},
     [CD_SER_NEVENTS] = {CD_G_DIAGNOSTICS, "nevents", CD_H5_I64, CD_SH_ONE, "1", "events located so far"},
     [CD_SER_WALL_TIME] = {CD_G_DIAGNOSTICS, "wall_time", CD_H5_F64, CD_SH_ONE, "s", "wall-clock time since the file was created"},
+    [CD_SER_CTRL] = {CD_G_ACTUATORS, "ctrl", CD_H5_F64, CD_SH_NU, "N m|N", "control input of each actuator (d->ctrl)"},
+    [CD_SER_ACT_FORCE] = {CD_G_ACTUATORS, "force", CD_H5_F64, CD_SH_NU, "N m|N",
+     "actuator torque: law + ctrl, after the motor envelope, before the transmission ratios"},
+    [CD_SER_ACT_VELOCITY] = {CD_G_ACTUATORS, "velocity", CD_H5_F64, CD_SH_NU, "rad/s|m/s",
+     "transmission rate sum_j ratio_j qdot_j"},
 };
 #define CD_H5_NSERIES_DEFS ((int)CD_SER_COUNT)
 
 /* The number of values per row of shape sh, and the tail dimensions the
  * dataset has (*ntail 0, 1 or 2). */
-static inline long cd_h5_shape_rowlen(cd_h5_shape sh, long nsys, long nslot, long njoint, long nbody, int *ntail,
-                                      long tail[2])
+static inline long cd_h5_shape_rowlen(cd_h5_shape sh, long nsys, long nslot, long njoint, long nbody, long nu,
+                                      int *ntail, long tail[2])
 {
     long t0 = 0, t1 = 0;
     int nt = 1;
@@ -134,6 +143,7 @@ static inline long cd_h5_shape_rowlen(cd_h5_shape sh, long nsys, long nslot, lon
     case CD_SH_NSLOT: t0 = nslot; break;
     case CD_SH_NSLOT3: t0 = nslot; t1 = 3; nt = 2; break;
     case CD_SH_NJOINT: t0 = njoint; break;
+    case CD_SH_NU: t0 = nu; break;
     case CD_SH_NBODY3: t0 = nbody; t1 = 3; nt = 2; break;
     case CD_SH_NBODY4: t0 = nbody; t1 = 4; nt = 2; break;
     }
