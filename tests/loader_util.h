@@ -5,6 +5,7 @@
 #ifndef CAPDYN_TEST_LOADER_UTIL_H
 #define CAPDYN_TEST_LOADER_UTIL_H
 
+#include "proc_util.h" /* slurp */
 #include <criterion/criterion.h>
 
 #include "capdyn/io.h"
@@ -67,21 +68,6 @@ static inline void lu_write(const char *dir, const char *name, const char *fmt, 
     cr_assert_eq(fclose(f), 0);
 }
 
-static inline char *lu_slurp(const char *path)
-{
-    FILE *f = fopen(path, "rb");
-    char *s;
-    long n;
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    s = malloc((size_t)n + 1);
-    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) { free(s); s = NULL; }
-    if (s) s[n] = 0;
-    fclose(f);
-    return s;
-}
 
 /* ---- the loader on a thread with a LU_STACK stack ---- */
 typedef struct {
@@ -147,8 +133,8 @@ static inline int lu_capdyn(const char *dir, char **out, char **err, const char 
     close(fo);
     close(fe);
     cr_assert_eq(waitpid(pid, &st, 0), pid);
-    if (out) *out = lu_slurp(o);
-    if (err) *err = lu_slurp(e);
+    if (out) *out = slurp(o);
+    if (err) *err = slurp(e);
     unlink(o);
     unlink(e);
     return WIFEXITED(st) ? WEXITSTATUS(st) : 128 + WTERMSIG(st);

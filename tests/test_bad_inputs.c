@@ -27,7 +27,7 @@ static int run_case(const char *dir, const char *file)
     int n = 0, rc, ok;
     snprintf(base, sizeof base, "%.*s", (int)(strlen(file) - 5), file);
     snprintf(path, sizeof path, "%s/%s.expected", dir, base);
-    want = lu_slurp(path);
+    want = slurp(path);
     if (!want) {
         cr_log_error("%s: no %s.expected", file, base);
         return 0;
@@ -35,7 +35,7 @@ static int run_case(const char *dir, const char *file)
     argv[n++] = "check";
     argv[n++] = file;
     snprintf(path, sizeof path, "%s/%s.args", dir, base);
-    args_text = lu_slurp(path);
+    args_text = slurp(path);
     if (args_text) {
         char *save = NULL, *tok;
         for (tok = strtok_r(args_text, "\n", &save); tok && n < 38; tok = strtok_r(NULL, "\n", &save)) argv[n++] = tok;
