@@ -94,3 +94,32 @@ Test(h5_torques, actuator_series_and_the_transmission_they_drive)
     unlink(h5);
     rmdir(dir);
 }
+
+Test(h5_torques, the_capture_verdict_is_in_the_results_file)
+{
+    /* capdyn run of the handrail scenario writes its verdict as the root
+     * attributes capture_*: captured, with the bar's panel held by >= 2
+     * contacts and a positive grasp quality (force closure). */
+    const char *bin = getenv("CAPDYN_BIN"), *root = getenv("CAPDYN_ROOT");
+    char dir[] = "/tmp/capdyn_cap_XXXXXX", cmd[2048], h5[512], verdict[16];
+    hid_t f;
+    double t = NAN, eps = NAN;
+    cr_assert(bin && root);
+    cr_assert(mkdtemp(dir));
+    snprintf(h5, sizeof h5, "%s/hr.h5", dir);
+    snprintf(cmd, sizeof cmd, "'%s' run '%s/scenarios/space_gripper_handrail.toml' -o '%s' -q --set simulation.duration=1.0",
+             bin, root, h5);
+    cr_assert_eq(system(cmd), 0, "%s", cmd);
+    f = H5Fopen(h5, H5F_ACC_RDONLY, H5P_DEFAULT);
+    cr_assert(f >= 0);
+    attr_s(f, "capture_verdict", verdict, sizeof verdict);
+    t = attr_d(f, "capture_t");
+    eps = attr_d(f, "capture_epsilon");
+    cr_expect_str_eq(verdict, "captured");
+    cr_expect(t > 0 && t < 1.0, "captured at %g s", t);
+    cr_expect_geq(attr_ll(f, "capture_n_stick") + attr_ll(f, "capture_n_slip"), 2);
+    cr_expect_gt(eps, 0.0, "force closure: epsilon %g", eps);
+    H5Fclose(f);
+    unlink(h5);
+    rmdir(dir);
+}

@@ -68,6 +68,20 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
 cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_error *err);
 /* Flushes to disk and commits the sample counter (readers trust only that). */
 cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err);
+
+/* The capture verdict of the run (verdict.h), written by cd_h5_close as the
+ * root attributes capture_* (created with the layout when the scenario has
+ * a gripper and an object; docs/results-format.md). Keeps a copy. */
+typedef struct {
+    const char *verdict;  /* "captured", "escaped", "unresolved" */
+    double t;             /* [s] time of the verdict (capture or escape), NaN if unresolved */
+    double peak_fn;       /* [N] */
+    double peak_tau;      /* [N m] */
+    double offset[3];     /* [m] object - palm centre at the end, palm frame */
+    double epsilon;       /* Ferrari-Canny epsilon of the final contacts (0: no force closure) */
+    int n_stick, n_slip;  /* contacts at the end */
+} cd_h5_capture;
+void cd_h5_set_capture(cd_h5_writer *w, const cd_h5_capture *c);
 /* Writes the final statistics and run status, flushes and closes; frees w.
  * status/message describe how the run ended. NULL w is a no-op. */
 cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,

@@ -186,6 +186,35 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
         print_wrapped_kv(out, "contacts", "no contact slots");
     }
 
+    /* the capture verdict (scenarios with a gripper and an object) */
+    {
+        char *verdict = cd_h5r_attr_str(r, "/", "capture_verdict");
+        if (verdict) {
+            if (verdict[0]) {
+                double t = NAN, pfn = NAN, ptau = NAN, off[3] = {NAN, NAN, NAN}, eps = NAN;
+                long long nst = -1, nsl = -1;
+                cd_h5r_attr_f64(r, "/", "capture_t", &t);
+                cd_h5r_attr_f64(r, "/", "capture_peak_fn", &pfn);
+                cd_h5r_attr_f64(r, "/", "capture_peak_tau", &ptau);
+                cd_h5r_attr_f64v(r, "/", "capture_offset", off, 3);
+                cd_h5r_attr_f64(r, "/", "capture_epsilon", &eps);
+                cd_h5r_attr_i64(r, "/", "capture_n_stick", &nst);
+                cd_h5r_attr_i64(r, "/", "capture_n_slip", &nsl);
+                if (isfinite(t)) snprintf(line, sizeof line, "%s at t = %.6g s", verdict, t);
+                else snprintf(line, sizeof line, "%s", verdict);
+                print_wrapped_kv(out, "capture", line);
+                snprintf(line, sizeof line,
+                         "peak contact force %.6g N, peak joint torque %.6g N m; at the end %lld contacts (%lld stick, "
+                         "%lld slip), object offset from the palm (%.4g, %.4g, %.4g) m, grasp quality epsilon %.4g%s",
+                         pfn, ptau, nst + nsl, nst, nsl, off[0], off[1], off[2], eps, eps > 0 ? "" : " (no force closure)");
+                print_wrapped_kv(out, "", line);
+            } else {
+                print_wrapped_kv(out, "capture", "no verdict (the run did not finish)");
+            }
+            free(verdict);
+        }
+    }
+
     /* integrator */
     {
         long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0;

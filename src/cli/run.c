@@ -409,6 +409,21 @@ int cmd_run(int argc, char **argv)
         snprintf(msg, sizeof msg, "finished at t = %.9g s", d->t);
     else
         snprintf(msg, sizeof msg, "%s", err.msg);
+    if (have_mon) { /* the verdict goes into the file (capdyn info, the summary below) */
+        cd_h5_capture cap;
+        int fc;
+        cd_error qerr;
+        memset(&cap, 0, sizeof cap);
+        cap.verdict = cd_verdict_name(mon.verdict);
+        cap.t = mon.verdict == CD_VERDICT_CAPTURED ? mon.t_capture : mon.verdict == CD_VERDICT_ESCAPED ? mon.t_escape : NAN;
+        cap.peak_fn = mon.peak_fn;
+        cap.peak_tau = mon.peak_tau;
+        memcpy(cap.offset, mon.offset, sizeof cap.offset);
+        cap.n_stick = mon.n_stick;
+        cap.n_slip = mon.n_slip;
+        if (cd_monitor_quality(&mon, m, d, &cap.epsilon, &fc, &qerr) != CD_OK) cap.epsilon = NAN;
+        cd_h5_set_capture(w, &cap);
+    }
     cst = cd_h5_close(w, m, d, st, msg, &werr);
     if (cst != CD_OK && !wmsg[0]) snprintf(wmsg, sizeof wmsg, "%s", werr.msg);
     ctx.wall0 = cli_wall() - ctx.wall0;
@@ -431,28 +446,6 @@ int cmd_run(int argc, char **argv)
             x.ft_max = ctx.ft_max;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
-            if (have_mon) {
-                printf("capture     %s", cd_verdict_name(mon.verdict));
-                if (mon.verdict == CD_VERDICT_CAPTURED) printf(" at t = %.6g s", mon.t_capture);
-                if (mon.verdict == CD_VERDICT_ESCAPED) printf(" at t = %.6g s", mon.t_escape);
-                printf(": object '%s' in hand '%s'\n", m->sys_name[mon.opt.object], m->sys_name[mon.opt.hand]);
-                printf("            peak contact force %.6g N, peak joint torque %.6g N m; at the end: %d contacts "
-                       "(%d stick, %d slip), offset from the palm %.6g m, %s, relative speed %.3g m/s, %.3g rad/s\n",
-                       mon.peak_fn, mon.peak_tau, mon.n_stick + mon.n_slip, mon.n_stick, mon.n_slip, mon.offset_norm,
-                       mon.enclosed ? "enclosed" : "not enclosed", mon.v_rel, mon.w_rel);
-                printf("            point tested for enclosure (palm frame): (%.4g, %.4g, %.4g) m\n", mon.point[0],
-                       mon.point[1], mon.point[2]);
-                {
-                    double eps;
-                    int fc;
-                    cd_error qerr;
-                    if (cd_monitor_quality(&mon, m, d, &eps, &fc, &qerr) == CD_OK)
-                        printf("            grasp quality (Ferrari-Canny epsilon, final contacts): %.4g%s\n", eps,
-                               fc ? "" : " (no force closure)");
-                    else
-                        printf("            grasp quality: not computed (%s)\n", qerr.msg);
-                }
-            }
         } else {
             cli_error("reading back '%s': %s", out, rerr.msg);
         }

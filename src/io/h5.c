@@ -126,6 +126,9 @@ typedef struct {
 
 struct cd_h5_writer {
     hid_t file;
+    int has_capture, capture_set;  /* the layout has the capture_* attributes; a verdict was given */
+    cd_h5_capture capture;
+    char capture_verdict[16];
     int nsys, nbody, nslot, ny;   /* of the model the file was created for */
     h5_series *ser;
     int nser, capser;
@@ -992,6 +995,31 @@ static void utc_now(char *out, size_t len)
  * so that closing rewrites them in place and adds no metadata (rule 3 at
  * the top of this file). Readers trust them once run_status is not
  * "running". */
+/* The capture verdict (cd_h5_set_capture), placeholders when c == NULL. */
+static int write_capture_attrs(hid_t f, const cd_h5_capture *c)
+{
+    double nan3[3] = {NAN, NAN, NAN};
+    int rc = 0;
+    rc |= attr_str_fixed(f, "capture_verdict", c ? c->verdict : "", 16);
+    rc |= attr_f64(f, "capture_t", c ? c->t : NAN);
+    rc |= attr_f64(f, "capture_peak_fn", c ? c->peak_fn : NAN);
+    rc |= attr_f64(f, "capture_peak_tau", c ? c->peak_tau : NAN);
+    rc |= attr_f64v(f, "capture_offset", 3, c ? c->offset : nan3);
+    rc |= attr_f64(f, "capture_epsilon", c ? c->epsilon : NAN);
+    rc |= attr_int(f, "capture_n_stick", c ? c->n_stick : -1);
+    rc |= attr_int(f, "capture_n_slip", c ? c->n_slip : -1);
+    return rc;
+}
+
+void cd_h5_set_capture(cd_h5_writer *w, const cd_h5_capture *c)
+{
+    if (!w || !c) return;
+    w->capture = *c;
+    snprintf(w->capture_verdict, sizeof w->capture_verdict, "%s", c->verdict ? c->verdict : "");
+    w->capture.verdict = w->capture_verdict;
+    w->capture_set = 1;
+}
+
 static int write_closing_attrs(hid_t f, const cd_data *d)
 {
     const cd_stats *s = d ? &d->stats : NULL;
@@ -1051,6 +1079,10 @@ static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenari
     rc |= attr_i64(f, "committed_events", 0);
     rc |= attr_i64(f, "committed_samples", 0);
     rc |= write_closing_attrs(f, NULL);
+    if (sc && sc->capture_hand >= 0 && sc->capture_object >= 0) {
+        w->has_capture = 1;
+        rc |= write_capture_attrs(f, NULL);
+    }
     return rc ? -1 : 0;
 }
 
@@ -1479,7 +1511,8 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
      * place) if there is still room for them */
     if (!w->failed && (!w->stopped || check_space(w, 65536.0, tmp.msg, sizeof tmp.msg) == 0)) {
         if (d) rc |= write_closing_attrs(f, d);
-        else {
+        if (w->has_capture && w->capture_set) rc |= write_capture_attrs(f, &w->capture);
+        if (!d) {
             char when[CD_H5_UTC_LEN];
             utc_now(when, sizeof when);
             rc |= attr_str_fixed(f, "closed_utc", when, CD_H5_UTC_LEN);
