@@ -391,3 +391,20 @@ Test(gripper_scenarios, soft_gripper_wraps_with_every_link_in_contact)
      * guards against made 22 626 at one contact of this scene before the fix */
     cr_expect_lt(a.nturn, 100, "slip_turn events %d", a.nturn);
 }
+
+Test(gripper, the_motor_no_load_speed_bounds_the_space_gripper_schedule)
+{
+    /* closing 110 deg in 1 s asks 1.92 rad/s; a motor with a no-load speed of
+     * 0.5 rad/s turns the synchronising pulley at most that fast: the
+     * schedule angle at 50 ms is 0.025 rad (exact), not 0.096 */
+    const char *sets[1] = {"gripper.motor={stall_torque=0.3, noload_speed=0.5}"};
+    cd_scenario *sc = load_gripper(sets, 1);
+    cd_error e;
+    cd_data *d = cd_data_create(sc->model, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(sc->model, d, 0.05, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_expect_lt(fabs(d->finger_theta[0] - 0.025), 1e-12, "theta_s = %.15g", d->finger_theta[0]);
+    cr_expect_eq(sc->model->finger_prm[4], 0.3, "the coupling limited by the stall torque");
+    cd_data_free(d);
+    cd_scenario_free(sc);
+}

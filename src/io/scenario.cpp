@@ -1763,6 +1763,9 @@ struct Builder {
                 lim = ct.num("torque_limit", 0.0, Range::NonNeg);
             }
             if (Ts > 0 && lim == 0) lim = Ts; /* the motor's stall torque limits the coupling */
+            /* the motor turns the synchronising pulley: the closing cannot be
+             * faster than its no-load speed */
+            if (w0 > 0 && cangle / ctime > w0) ctime = cangle / w0;
             std::vector<double> st = {0.0}, sq = {0.0};
             if (cstart > 0) { st.push_back(cstart); sq.push_back(0.0); }
             st.push_back(cstart + ctime); sq.push_back(cangle);
