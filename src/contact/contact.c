@@ -284,16 +284,13 @@ int cd_contact_transition(const cd_model *m, cd_data *d, int k, int forgive, cd_
         cd_v3_normalize(st);
         cd_v3_copy(perp, vs);
         cd_v3_axpy(perp, -cd_v3_dot(vs, st), st);
-        {
-            /* the cone's growth rate zrate (v_a = v_t - zrate s_t), and the slip
-             * function after a re-anchoring to s' = v_a/|v_a|: it must be
-             * positive, else no slip direction is consistent (the cone grows
-             * faster than the point slips) and the contact sticks */
-            double zrate = cd_v3_dot(vt, st) - cd_v3_dot(vs, st), g_new = -1.0;
-            if (nv > 0) g_new = cd_v3_dot(vt, vs) / nv - zrate + d->opt.v_reg;
-            if (!(g_new > 0)) cd_v3_zero(perp);
-        }
-        if (cd_v3_norm(perp) > 100.0 * d->opt.v_reg) {
+        /* the cone's growth rate zrate (v_a = v_t - zrate s_t), and the slip
+         * function after a re-anchoring to s' = v_a/|v_a|: it must be
+         * positive, else no slip direction is consistent (the cone grows
+         * faster than the point slips) and the contact sticks */
+        double zrate = cd_v3_dot(vt, st) - cd_v3_dot(vs, st);
+        double g_new = nv > 0 ? cd_v3_dot(vt, vs) / nv - zrate + d->opt.v_reg : -1.0;
+        if (cd_v3_norm(perp) > 100.0 * d->opt.v_reg && g_new > 0) {
             /* 3-D slip that turned past 90 deg at speed: re-anchor, keep slipping */
             kind = CD_EV_SLIP_TURN;
             cd_v3_scale(d->slot_dir + 3 * k, vs, 1.0 / nv);

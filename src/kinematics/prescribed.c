@@ -31,13 +31,9 @@ void cd_prescribed_joint(const cd_model *m, int b, double t, double *q, double *
         }
     } else if (m->body_presc[b] == CD_PRESCRIBE_WAYPOINTS) {
         const double *tt = m->tbl_t + m->body_wp_adr[b], *qq = m->tbl_v + m->body_wp_adr[b];
-        int n = m->body_wp_n[b], lo = 0, hi = n;
+        int n = m->body_wp_n[b], lo = cd_count_le(tt, n, t); /* the waypoint ahead */
         double q0, q1, t0, t1, s, ds, dds;
         /* before the first waypoint: from the initial position, starting at t = 0 */
-        while (lo < hi) {
-            int mid = (lo + hi) / 2;
-            if (tt[mid] <= t) lo = mid + 1; else hi = mid;
-        }
         if (lo >= n) { *q = qq[n - 1]; return; }
         if (lo == 0) {
             q0 = m->body_q0[b]; t0 = 0.0;

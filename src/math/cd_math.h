@@ -149,6 +149,19 @@ static inline void cd_quat_deriv_world(double qd[4], const double q[4], const do
  * process, and the library must never abort nor change that process-wide
  * handler. Returns -1 (nothing solved) when a pivot is not positive, or is
  * below n eps times its diagonal entry (numerically singular). */
+/* Number of entries of the increasing array t[0..n) that are <= x: the
+ * index of the first time after x (binary search). Schedules, waypoints and
+ * breakpoints are all found with it. */
+static inline int cd_count_le(const double *t, int n, double x)
+{
+    int lo = 0, hi = n;
+    while (lo < hi) {
+        int mid = (lo + hi) / 2;
+        if (t[mid] <= x) lo = mid + 1; else hi = mid;
+    }
+    return lo;
+}
+
 static inline int cd_chol_decomp(double *H, int n)
 {
     int i, j, k;

@@ -34,14 +34,7 @@ static double sgnpow(double x, double p)
 
 int cd_schedule_piece(const cd_model *m, int a, double t)
 {
-    const double *tt = m->tbl_t + m->act_tbl_adr[a];
-    int lo = 0, hi = m->act_tbl_n[a];
-    /* first row with time > t */
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (tt[mid] <= t) lo = mid + 1; else hi = mid;
-    }
-    return lo;
+    return cd_count_le(m->tbl_t + m->act_tbl_adr[a], m->act_tbl_n[a], t);
 }
 
 /* law of actuator a, schedules by the row in d->act_piece */

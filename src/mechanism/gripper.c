@@ -27,13 +27,10 @@
 static double schedule(const cd_model *m, int f, double t)
 {
     const double *tt = m->tbl_t + m->finger_tbl_adr[f], *qq = m->tbl_v + m->finger_tbl_adr[f];
-    int n = m->finger_tbl_n[f], lo = 0, hi = n;
+    int n = m->finger_tbl_n[f], lo;
     if (t <= tt[0]) return qq[0];
     if (t >= tt[n - 1]) return qq[n - 1];
-    while (lo < hi) { /* first row with time > t */
-        int mid = (lo + hi) / 2;
-        if (tt[mid] <= t) lo = mid + 1; else hi = mid;
-    }
+    lo = cd_count_le(tt, n, t); /* the first row after t: 1 .. n-1 here */
     return qq[lo - 1] + (qq[lo] - qq[lo - 1]) * (t - tt[lo - 1]) / (tt[lo] - tt[lo - 1]);
 }
 

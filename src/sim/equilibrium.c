@@ -90,13 +90,29 @@ static cd_status residual(const cd_model *m, cd_data *d, const eq_ctx *c, const 
     return CD_OK;
 }
 
+/* The Jacobian d udot / d delta at delta by forward differences of step h,
+ * given the residual r0 there; r: n scratch. */
+static cd_status fd_jacobian(const cd_model *m, cd_data *d, const eq_ctx *c, double *delta, const double *r0,
+                             double *r, double *J, double h)
+{
+    int n = c->n, i, j;
+    cd_status st = CD_OK;
+    for (j = 0; j < n && st == CD_OK; j++) {
+        delta[j] += h;
+        st = residual(m, d, c, delta, r);
+        delta[j] -= h;
+        for (i = 0; i < n; i++) J[i * n + j] = (r[i] - r0[i]) / h;
+    }
+    return st;
+}
+
 /* The Jacobian (into Jf) with every closed slot and stop let go and every
  * joint friction slipping without torque: what holds nothing. The modes are
  * kept in save (nslot + nlim + 2 nfric words) and restored. r: 2 n scratch. */
 static cd_status free_jacobian(const cd_model *m, cd_data *d, const eq_ctx *c, double *delta, double *r,
                                double *Jf, double h, double *save)
 {
-    int n = c->n, i, j, k;
+    int n = c->n, k;
     cd_status st;
     double *r0 = r + n;
     for (k = 0; k < m->nslot; k++) { save[k] = d->slot_mode[k]; d->slot_mode[k] = CD_MODE_OPEN; }
@@ -108,12 +124,7 @@ static cd_status free_jacobian(const cd_model *m, cd_data *d, const eq_ctx *c, d
         d->fric_dir[k] = 0.0;
     }
     st = residual(m, d, c, delta, r0);
-    for (j = 0; j < n && st == CD_OK; j++) {
-        delta[j] += h;
-        st = residual(m, d, c, delta, r);
-        delta[j] -= h;
-        for (i = 0; i < n; i++) Jf[i * n + j] = (r[i] - r0[i]) / h;
-    }
+    if (st == CD_OK) st = fd_jacobian(m, d, c, delta, r0, r, Jf, h);
     for (k = 0; k < m->nslot; k++) d->slot_mode[k] = (int)save[k];
     for (k = 0; k < m->nlim; k++) d->lim_mode[k] = (int)save[m->nslot + k];
     for (k = 0; k < m->nfric; k++) {
@@ -163,13 +174,7 @@ cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
         gsl_vector_view Sv, wv, rv, xv;
         double smax;
         int k, ii;
-        /* Jacobian by forward differences */
-        for (j = 0; j < n; j++) {
-            delta[j] += fd_h;
-            if ((st = residual(m, d, &c, delta, r1)) != CD_OK) goto out;
-            delta[j] -= fd_h;
-            for (i = 0; i < n; i++) J[i * n + j] = (r1[i] - r[i]) / fd_h;
-        }
+        if ((st = fd_jacobian(m, d, &c, delta, r, r1, J, fd_h)) != CD_OK) goto out;
         if (it == 0) {
             /* the degrees of freedom the closed contacts, stops and frictions
              * hold: those whose column changes when they are all let go (a

@@ -467,11 +467,7 @@ static double next_dwell_end(const cd_model *m, const cd_data *d)
 /* first schedule breakpoint after t */
 static double next_break(const cd_model *m, double t)
 {
-    int lo = 0, hi = m->nbreak;
-    while (lo < hi) {
-        int mid = (lo + hi) / 2;
-        if (m->breaks[mid] <= t) lo = mid + 1; else hi = mid;
-    }
+    int lo = cd_count_le(m->breaks, m->nbreak, t);
     return lo < m->nbreak ? m->breaks[lo] : HUGE_VAL;
 }
 
