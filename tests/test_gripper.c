@@ -251,17 +251,13 @@ Test(gripper, soft_and_tako_split_the_motor_torque_quadratically)
 static cd_monitor run_verdict(cd_scenario *sc, double t_end)
 {
     cd_monitor mo;
-    cd_monitor_opts op = cd_monitor_opts_default();
+    cd_monitor_opts op = cd_scenario_monitor_opts(sc);
     cd_error e;
     cd_data *d = cd_data_create(sc->model, 0, &e);
     double t;
     int i, n;
     cr_assert(d, "%s", e.msg);
     cr_assert(sc->capture_hand >= 0 && sc->capture_object >= 0, "hand %d object %d", sc->capture_hand, sc->capture_object);
-    op.hand = sc->capture_hand;
-    op.object = sc->capture_object;
-    op.v_max = sc->capture_v_max; op.w_max = sc->capture_w_max; op.dwell = sc->capture_dwell; op.workspace = sc->capture_workspace;
-    op.feature = sc->capture_feature;
     cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
     n = (int)ceil(t_end / sc->output_dt - 1e-9);
     for (i = 1; i <= n; i++) {
@@ -310,7 +306,7 @@ static scen_result run_scenario(const char *rel)
     cd_error e;
     cd_scenario *sc;
     cd_monitor mo;
-    cd_monitor_opts op = cd_monitor_opts_default();
+    cd_monitor_opts op;
     cd_data *d;
     scen_result res;
     int i, n, b, k;
@@ -320,8 +316,7 @@ static scen_result run_scenario(const char *rel)
     cr_assert(sc, "%s", e.msg);
     d = cd_data_create(sc->model, sc->event_capacity, &e);
     cr_assert(d, "%s", e.msg);
-    op.hand = sc->capture_hand; op.object = sc->capture_object; op.feature = sc->capture_feature;
-    op.v_max = sc->capture_v_max; op.w_max = sc->capture_w_max; op.dwell = sc->capture_dwell; op.workspace = sc->capture_workspace;
+    op = cd_scenario_monitor_opts(sc);
     cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
     n = (int)ceil(sc->duration / sc->output_dt - 1e-9);
     for (i = 1; i <= n; i++) {

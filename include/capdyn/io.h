@@ -6,6 +6,7 @@
 
 #include "capdyn/model.h"
 #include "capdyn/sim.h"
+#include "capdyn/verdict.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -44,6 +45,10 @@ typedef struct {
  * or names the file that cannot be read (CD_EIO). */
 cd_scenario *cd_scenario_load(const char *path, const char *const *overrides, int noverrides,
                               cd_error *err);
+/* The capture monitor's options of a scenario ([gripper] hand, [capture]
+ * object, feature and thresholds; hand/object -1 if it has none). */
+cd_monitor_opts cd_scenario_monitor_opts(const cd_scenario *sc);
+
 /* Frees a scenario and its model; NULL is a no-op. */
 void cd_scenario_free(cd_scenario *sc);
 

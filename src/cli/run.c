@@ -350,14 +350,7 @@ int cmd_run(int argc, char **argv)
     /* the capture verdict, when the scenario has a gripper and an object */
     have_mon = sc->capture_hand >= 0 && sc->capture_object >= 0;
     if (have_mon) {
-        cd_monitor_opts mop = cd_monitor_opts_default();
-        mop.hand = sc->capture_hand;
-        mop.object = sc->capture_object;
-        mop.v_max = sc->capture_v_max;
-        mop.w_max = sc->capture_w_max;
-        mop.dwell = sc->capture_dwell;
-        mop.workspace = sc->capture_workspace;
-        mop.feature = sc->capture_feature;
+        cd_monitor_opts mop = cd_scenario_monitor_opts(sc);
         if (cd_monitor_init(&mon, m, d, &mop, &err) != CD_OK) {
             cli_error("%s", err.msg);
             have_mon = 0;

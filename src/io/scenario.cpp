@@ -1627,8 +1627,6 @@ struct Builder {
         double rad = t.num("radius", 0.008, Range::Pos);
         double spacing = t.num("spacing", 0.1, Range::Pos);
         double cps = t.num("checkpoint_spacing", rad, Range::Pos);
-        double total = 0;
-        for (double l : L) total += l;
         /* the hand system */
         cd_system_desc sd = cd_system_desc_default();
         sd.name = name.c_str();
@@ -1660,10 +1658,8 @@ struct Builder {
         std::vector<std::vector<int>> fingers(nf);
         for (int f = 0; f < nf; f++) {
             double phi = preset == "two_opposed" ? (f == 0 ? M_PI : 0.0) : M_PI / 2 + 2 * M_PI * f / 3.0;
-            double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {er[2] * 0 - 0 * 1, 0, er[0] * 1}; /* e_r x y */
-            ax[0] = -er[2];
-            ax[1] = 0;
-            ax[2] = er[0];
+            /* radial direction e_r; the finger closes about e_r x y */
+            double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {-er[2], 0, er[0]};
             int parent = S.bodies[0].id;
             for (size_t j = 0; j < L.size(); j++) {
                 cd_link_desc d = cd_link_desc_default();
@@ -1812,7 +1808,6 @@ struct Builder {
             for (auto &sh : s2.shapes)
                 if (cd_model_add_pair(m.get(), S.id, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
         }
-        (void)total;
     }
 
     /* [[system]] (is_target = false) or the [[target]] sugar */

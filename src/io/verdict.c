@@ -10,6 +10,7 @@
  * of every finger (the side its joint axis closes toward). */
 #include "capdyn/verdict.h"
 #include "capdyn/analysis.h"
+#include "capdyn/io.h"
 #include "../math/cd_math.h"
 
 #include <math.h>
@@ -156,6 +157,19 @@ static int enclosed(const cd_model *m, const cd_data *d, int hand, const double 
             return h > hbase && h < hmax;
         }
     }
+}
+
+cd_monitor_opts cd_scenario_monitor_opts(const cd_scenario *sc)
+{
+    cd_monitor_opts o = cd_monitor_opts_default();
+    o.hand = sc->capture_hand;
+    o.object = sc->capture_object;
+    o.feature = sc->capture_feature;
+    o.v_max = sc->capture_v_max;
+    o.w_max = sc->capture_w_max;
+    o.dwell = sc->capture_dwell;
+    o.workspace = sc->capture_workspace;
+    return o;
 }
 
 cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, const cd_monitor_opts *opt,
