@@ -1135,6 +1135,8 @@ struct SysInfo {
     std::string name;
     int id;
     bool is_target = false;
+    Loc frame_loc;                 /* a target given in the palm's frame: where it says so */
+    bool in_palm = false;
     Loc loc;
     std::string path;
     std::vector<BodyInfo> bodies;  /* base first (named "base" here) */
@@ -1601,13 +1603,15 @@ struct Builder {
         if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120"});
         int nf = preset == "two_opposed" ? 2 : 3;
         /* palm */
-        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0};
+        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0}, prot[9];
+        cd_m3_identity(prot);
         if (Entry *e = t.get("palm")) {
             std::string pp = t.kp("palm");
-            Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position"});
+            Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position", "rpy_deg", "quaternion"});
             pt.vec("size", 3, psize, Range::Pos);
             pmass = pt.num("mass", pmass, Range::Pos);
             pt.vec("position", 3, ppos);
+            rotation_of(pt, prot);
         }
         /* fingers */
         std::vector<double> L, M;
@@ -1636,6 +1640,7 @@ struct Builder {
         sd.inertia[4] = pmass * (psize[0] * psize[0] + psize[2] * psize[2]) / 12.0;
         sd.inertia[8] = pmass * (psize[0] * psize[0] + psize[1] * psize[1]) / 12.0;
         for (int k = 0; k < 3; k++) sd.pos[k] = ppos[k];
+        cd_m3_to_quat(sd.quat, prot);
         SysInfo S;
         S.name = name;
         S.loc = t.n->loc;
@@ -1819,6 +1824,8 @@ struct Builder {
         if (!is_target) {
             keys.push_back("base");
             keys.push_back("link");
+        } else {
+            keys.push_back("frame");
         }
         Tab t(&node, path, keys);
         SysInfo s;
@@ -1870,6 +1877,10 @@ struct Builder {
                 builder_fail(e->val->loc, t.kp("prescribed_motion"));
         }
         s.add_body("base", m->sys_body_adr[s.id]);
+        if (Entry *e = is_target ? t.get("frame") : nullptr) {
+            s.in_palm = choice_of(*e->val, t.kp("frame"), {"world", "palm"}) == "palm";
+            s.frame_loc = e->kloc;
+        }
         sys_at.emplace(s.name, sys.size());
         sys.push_back(s);
         SysInfo &S = sys.back();
@@ -2214,6 +2225,65 @@ struct Builder {
         }
 
         if (cd_model_finalize(m.get(), &err) != CD_OK) builder_fail(root.loc, "");
+        place_in_palm(run);
+    }
+
+    /* Targets given with frame = "palm": their position, orientation,
+     * velocity and angular velocity were read relative to the palm (the
+     * hand's palm body at the initial state, a moving frame if the hand
+     * moves: velocities are relative to it, in its axes); here they become
+     * world values. Done on the finalized model, whose initial kinematics
+     * place the palm (a hand on an arm is posed by the arm's q0). */
+    void place_in_palm(const Run &run)
+    {
+        const SysInfo *first = nullptr;
+        for (auto &s2 : sys)
+            if (s2.in_palm && !first) first = &s2;
+        if (!first) return;
+        for (auto &s2 : sys)
+            if (s2.in_palm && run.hand < 0)
+                fail_at(s2.frame_loc, s2.path + ".frame", "expected \"world\": frame = \"palm\" needs a hand (a [gripper] table)");
+        /* the pose given by q0 (not a settled one: the settle, if asked
+         * for, runs at the start of the run with the targets in place) */
+        int eq = m->opt.equilibrium_start;
+        m->opt.equilibrium_start = 0;
+        std::unique_ptr<cd_data, void (*)(cd_data *)> d(cd_data_create(m.get(), 16, &err), cd_data_free);
+        m->opt.equilibrium_start = eq;
+        if (!d) builder_fail(first->frame_loc, first->path + ".frame");
+        cd_kinematics(m.get(), d.get());
+        int pb = m->sys_body_adr[run.hand];
+        const double *R = d->body_R + 9 * pb, *x = d->body_x + 3 * pb, *w = d->body_w + 3 * pb;
+        double vp[3]; /* the palm frame origin's velocity: v_com + w x (x - com) */
+        {
+            double c[3], r[3], wr[3];
+            cd_m3_mulv(c, R, m->body_com + 3 * pb);
+            for (int k = 0; k < 3; k++) r[k] = -c[k];
+            cd_v3_cross(wr, w, r);
+            for (int k = 0; k < 3; k++) vp[k] = d->body_v[3 * pb + k] + wr[k];
+        }
+        for (auto &s2 : sys) {
+            if (!s2.in_palm) continue;
+            int id = s2.id;
+            double *p = m->sys_pos0 + 3 * id, *q = m->sys_quat0 + 4 * id, *v = m->sys_vel0 + 3 * id, *om = m->sys_angvel0 + 3 * id;
+            double Rt[9], Rw[9], rw[3], vw[3], ow[3], wxr[3];
+            cd_m3_mulv(rw, R, p);
+            cd_quat_to_m3(Rt, q);
+            cd_m3_mul(Rw, R, Rt);
+            cd_m3_mulv(vw, R, v);
+            cd_m3_mulv(ow, R, om);
+            cd_v3_cross(wxr, w, rw);
+            for (int k = 0; k < 3; k++) {
+                p[k] = x[k] + rw[k];
+                v[k] = vp[k] + wxr[k] + vw[k];
+                om[k] = w[k] + ow[k];
+            }
+            cd_m3_to_quat(q, Rw);
+            int b0 = m->sys_body_adr[id];
+            if (m->body_presc[b0] != CD_PRESCRIBE_NONE) { /* a prescribed base moves at the world values */
+                cd_v3_copy(m->body_presc_prm + 6 * b0, v);
+                cd_v3_copy(m->body_presc_prm + 6 * b0 + 3, om);
+            }
+        }
     }
 };
 

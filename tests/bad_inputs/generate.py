@@ -99,12 +99,14 @@ c('fixed_base_velocity', ARM.replace('base = "fixed"','base = "fixed"\nvelocity 
 c('event_capacity_too_big', BALL.replace('duration = 1.0','duration = 1.0\nevent_capacity = 1000000000'))
 c('max_steps_fraction', BALL.replace('duration = 1.0','duration = 1.0\nmax_steps = 1.5'))
 c('max_rhs_evals_negative', BALL.replace('duration = 1.0','duration = 1.0\nmax_rhs_evals = -1'))
-c('gripper_reserved_type', BALL + '\n[gripper]\ntype = "tako"\n')
+c('gripper_type_unknown', BALL + '\n[gripper]\ntype = "claw"\n')
 c('shape_key_for_other_type', BALL + '\n[[system.shape]]\nname = "s"\ntype = "sphere"\nradius = 0.1\nsize = [1, 1, 1]\n')
 c('vector_wrong_length', BALL.replace('mass = 1.0','mass = 1.0\nposition = [0, 0]'))
+c('target_palm_frame_without_hand', '[simulation]\nduration = 0.1\n\n[[target]]\nname = "object"\nmass = 0.3\n'
+  'inertia = [1e-4, 1e-4, 1e-4]\nframe = "palm"\nposition = [0.0, 0.07, 0.0]\nshape = { type = "sphere", radius = 0.03 }\n')
 
 for f in os.listdir(D):
-    if f[:2].isdigit(): os.remove(os.path.join(D,f))
+    if f[:2].isdigit() and not f.endswith('.expected'): os.remove(os.path.join(D,f))
 for i,(name,(text,args,comment)) in enumerate(cases.items(),1):
     base='%02d_%s' % (i,name)
     open(os.path.join(D,base+'.toml'),'w').write(text)
