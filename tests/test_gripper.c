@@ -507,3 +507,65 @@ Test(gripper, a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is)
     cr_expect_lt(dmax[2], 5e-8, "relative spin differs by %.3g rad/s", dmax[2]);
     cr_expect_lt(dmax[3], 1.4e-8, "relative attitude differs by %.3g", dmax[3]);
 }
+
+/* Three fingers at 120 deg (issue 8): the object is enclosed when it is in
+ * the region bounded by the palm and the fingers, the convex hull of the
+ * finger bases, joints and tips (verdict.c). Static poses, no integration:
+ * fingers closed 20 deg at the base and 40 deg more at the outer joint (the
+ * middle joints at r 0.023 m, y 0.095 m; the tips across the axis at y
+ * 0.13 m) over a ball at the axis, y 0.075 m: enclosed; the same ball beside
+ * the hand, above the fingertips, or below the palm face: not; closed 60 and
+ * 50 deg (the fingers folded down past the axis, nothing above y 0.06 m):
+ * the ball at y 0.075 m is not enclosed; the fingers open (0 deg) with the
+ * ball between them at mid height: enclosed (the hull of straight fingers is
+ * the prism they span), beyond their tips: not. */
+static int enclosed_at(double q_base, double q_out, double bx, double by, double bz)
+{
+    char p[1024], pos[128];
+    const char *r = getenv("CAPDYN_ROOT");
+    const char *s2[2];
+    cd_scenario *sc;
+    cd_error e;
+    cd_data *d;
+    cd_monitor mo;
+    cd_monitor_opts op;
+    int f, j, res;
+    snprintf(pos, sizeof pos, "target[0].position=[%.17g, %.17g, %.17g]", bx, by, bz);
+    s2[0] = pos;
+    s2[1] = "simulation.duration=0.01";
+    snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_three.toml", r ? r : ".");
+    sc = cd_scenario_load(p, s2, 2, &e);
+    cr_assert(sc, "%s", e.msg);
+    for (f = 0; f < 3; f++)
+        for (j = 0; j < 2; j++) {
+            char nm[64];
+            int b;
+            snprintf(nm, sizeof nm, "hand/f%d_l%d", f, j);
+            b = cd_model_body_id(sc->model, nm);
+            cr_assert(b > 0, "%s", nm);
+            sc->model->body_q0[b] = (j == 0 ? q_base : q_out) * M_PI / 180;
+        }
+    d = cd_data_create(sc->model, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    op = cd_scenario_monitor_opts(sc);
+    cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
+    cd_kinematics(sc->model, d);
+    cd_monitor_update(&mo, sc->model, d);
+    res = mo.enclosed;
+    cd_data_free(d);
+    cd_scenario_free(sc);
+    return res;
+}
+
+Test(gripper, three_finger_enclosure_is_the_region_of_palm_and_fingers)
+{
+    /* palm face y = 0.02; finger bases at radius 0.05; links 0.08 + 0.07 */
+    cr_expect(enclosed_at(20, 40, 0.0, 0.075, 0.0), "closed over a ball at the axis");
+    cr_expect(!enclosed_at(20, 40, 0.2, 0.075, 0.0), "ball beside the hand");
+    cr_expect(!enclosed_at(20, 40, 0.0, 0.3, 0.0), "ball above the closed fingertips");
+    cr_expect(!enclosed_at(20, 40, 0.0, 0.0, 0.0), "ball below the palm face");
+    cr_expect(!enclosed_at(60, 50, 0.0, 0.075, 0.0), "fingers folded below the ball");
+    cr_expect(enclosed_at(0, 0, 0.0, 0.1, 0.0), "ball between open fingers");
+    cr_expect(!enclosed_at(0, 0, 0.0, 0.2, 0.0), "ball beyond the open fingertips (0.17 m)");
+    cr_expect(!enclosed_at(0, 0, 0.045, 0.1, 0.04), "ball outside the open fingers' prism");
+}

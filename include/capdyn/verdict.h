@@ -2,9 +2,10 @@
  * (issue 8; docs/grippers.md). A monitor watches a run sample by sample and
  * decides, from the physics only:
  *   captured    the object is enclosed by the hand (its centre of mass, or the
- *               centre of its grasp feature, inside
- *               the polygon of the palm face and the fingers, in the fingers'
- *               plane), its velocity relative to the palm has decayed below
+ *               centre of its grasp feature, inside the polygon of the palm
+ *               face and the fingers in the fingers' plane when the fingers
+ *               turn about parallel axes, else inside the convex hull of the
+ *               finger bases, joints and tips), its velocity relative to the palm has decayed below
  *               v_max and w_max, the fingers have stopped (every hand joint
  *               rate below w_max: the grasp has settled, it is not still
  *               closing), and the set of its contacts has not changed for

@@ -5,14 +5,17 @@
  * inside the polygon that runs up one finger (joint origins, then its tip:
  * the farthest check point of its last link), across, and down the other
  * fingers, closed by the palm between the finger bases. For other hands
- * (three fingers at 120 deg) the cage test: the centre of mass must lie
- * above the palm face, below the highest finger point, and on the inner side
- * of every finger (the side its joint axis closes toward). */
+ * (three fingers at 120 deg) in 3-D: the point must lie inside the convex
+ * hull of the finger bases (the palm between them), every finger joint and
+ * every fingertip: the region bounded by the palm and the fingers (GJK of
+ * the point against that hull, libccd; no allocation). */
 #include "capdyn/verdict.h"
 #include "capdyn/analysis.h"
 #include "capdyn/io.h"
 #include "../math/cd_math.h"
 
+#include <ccd/ccd.h>
+#include <ccd/vec3.h>
 #include <math.h>
 #include <string.h>
 
@@ -93,6 +96,33 @@ static int in_polygon(const double (*p)[2], int n, double x, double y)
     return in;
 }
 
+/* the point set of a three-finger hand and the tested point, for libccd */
+#define HULL_MAX (MAXF * 33)
+typedef struct {
+    double p[HULL_MAX][3];
+    int n;
+    double c[3];
+} hull_pts;
+
+static void point_support(const void *obj, const ccd_vec3_t *dir, ccd_vec3_t *out)
+{
+    const hull_pts *h = (const hull_pts *)obj;
+    (void)dir;
+    ccdVec3Set(out, h->c[0], h->c[1], h->c[2]);
+}
+
+static void hull_support(const void *obj, const ccd_vec3_t *dir, ccd_vec3_t *out)
+{
+    const hull_pts *h = (const hull_pts *)obj;
+    int k, best = 0;
+    double dmax = -HUGE_VAL;
+    for (k = 0; k < h->n; k++) {
+        double dd = h->p[k][0] * ccdVec3X(dir) + h->p[k][1] * ccdVec3Y(dir) + h->p[k][2] * ccdVec3Z(dir);
+        if (dd > dmax) { dmax = dd; best = k; }
+    }
+    ccdVec3Set(out, h->p[best][0], h->p[best][1], h->p[best][2]);
+}
+
 static int enclosed(const cd_model *m, const cd_data *d, int hand, const double c[3])
 {
     int first[MAXF], nf = fingers(m, hand, first), f, k, parallel = 1;
@@ -128,34 +158,23 @@ static int enclosed(const cd_model *m, const cd_data *d, int hand, const double 
         return in_polygon((const double (*)[2])poly, np, 0.0, 0.0);
     }
     {
-        /* the cage: above the palm face, below the highest finger point, inside every finger */
-        const double *R0 = d->body_R + 9 * m->sys_body_adr[hand], *x0 = d->body_x + 3 * m->sys_body_adr[hand];
-        double up[3] = {R0[1], R0[4], R0[7]}, rc[3], hmax = -HUGE_VAL, hbase = HUGE_VAL;
-        cd_v3_sub(rc, c, x0);
+        /* 3-D: inside the convex hull of the finger bases (the palm between
+         * them), every finger joint and every fingertip (GJK, libccd) */
+        hull_pts h;
+        ccd_t ccd;
+        h.n = 0;
         for (f = 0; f < nf; f++) {
             int ch[32], nc = chain(m, hand, first[f], ch, 32);
-            double tip[3], r[3], inward[3], h;
-            tip_of(m, d, ch[nc - 1], tip);
-            cd_v3_sub(r, tip, x0);
-            h = cd_v3_dot(r, up);
-            if (h > hmax) hmax = h;
-            cd_v3_sub(r, d->body_x + 3 * first[f], x0);
-            h = cd_v3_dot(r, up);
-            if (h < hbase) hbase = h;
-            /* inner side: the direction the base joint closes the finger, at its base */
-            {
-                double arm[3], base[3];
-                cd_v3_copy(base, d->body_x + 3 * first[f]);
-                cd_v3_sub(arm, tip, base);
-                cd_v3_cross(inward, d->body_axisw + 3 * first[f], arm);
-                cd_v3_sub(r, c, base);
-                if (cd_v3_dot(r, inward) < 0) return 0;
-            }
+            for (k = 0; k < nc && h.n < HULL_MAX; k++) cd_v3_copy(h.p[h.n++], d->body_x + 3 * ch[k]);
+            if (h.n < HULL_MAX) tip_of(m, d, ch[nc - 1], h.p[h.n++]);
         }
-        {
-            double h = cd_v3_dot(rc, up);
-            return h > hbase && h < hmax;
-        }
+        cd_v3_copy(h.c, c);
+        CCD_INIT(&ccd);
+        ccd.support1 = point_support;
+        ccd.support2 = hull_support;
+        ccd.max_iterations = 100;
+        ccd.epa_tolerance = 1e-12;
+        return ccdGJKIntersect(&h, &h, &ccd) ? 1 : 0;
     }
 }
 
