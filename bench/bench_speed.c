@@ -130,13 +130,32 @@ static double dist3(const double a[3], const double b[3])
     return sqrt(dx * dx + dy * dy + dz * dz);
 }
 
+/* Extra scenario overrides for both capdyn scenes from the environment:
+ * CAPDYN_BENCH_SET='simulation.integrator="ros34pw2";simulation.h_max=0.05'
+ * (';'-separated, at most 7), e.g. to bench another stepper. */
+static int bench_overrides(const char **ovr, int n, char *buf, size_t len)
+{
+    const char *env = getenv("CAPDYN_BENCH_SET");
+    char *p;
+    if (!env || !*env) return n;
+    snprintf(buf, len, "%s", env);
+    for (p = strtok(buf, ";"); p && n < 8; p = strtok(NULL, ";"))
+        if (*p) ovr[n++] = p;
+    return n;
+}
+
 static void run_capdyn(int scene, run_result *r)
 {
-    static const char *ovr_grasp[] = {"simulation.rtol=1e-6"};
+    const char *ovr[8];
+    char ovbuf[1024];
+    int nov = 0;
     const char *path = scene == SC_GRASP ? "scenarios/paper_fig5_envelope_grasp.toml" : "bench/incline.toml";
     cd_error e;
     long h0 = heap_bytes();
-    cd_scenario *sc = cd_scenario_load(path, scene == SC_GRASP ? ovr_grasp : NULL, scene == SC_GRASP ? 1 : 0, &e);
+    cd_scenario *sc;
+    if (scene == SC_GRASP) ovr[nov++] = "simulation.rtol=1e-6";
+    nov = bench_overrides(ovr, nov, ovbuf, sizeof ovbuf);
+    sc = cd_scenario_load(path, ovr, nov, &e);
     cd_data *d;
     int s;
     double t0, tmid = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
@@ -532,6 +551,7 @@ int main(int argc, char **argv)
     }
     say("command:");
     for (i = 0; i < argc; i++) say(" %s", argv[i]);
+    if (getenv("CAPDYN_BENCH_SET") && *getenv("CAPDYN_BENCH_SET")) say(" (CAPDYN_BENCH_SET='%s')", getenv("CAPDYN_BENCH_SET"));
     say("   (make bench runs it; %d repetitions, grasp hold %g s)\n", reps, T_HOLD);
     if (do_fd) rc |= bench_fd(reps);
     if (do_scenes) rc |= bench_scenes(reps);

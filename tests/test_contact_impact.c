@@ -152,6 +152,33 @@ Test(contact_impact, linear_spring_dashpot_restitution_and_duration)
     }
 }
 
+/* The same closed form with the linearly implicit stepper (ros34pw2, order
+ * 3): events are located by its own steps, the contact duration and the
+ * restitution agree with the closed form to the same 1e-6 at rtol 1e-12. */
+Test(contact_impact, linear_impact_with_the_stiff_stepper)
+{
+    const double mass = 1.0, K = 1e4, r = 0.05, gap = 0.01, v0 = 1.0, zeta = 0.3;
+    double D = 2.0 * zeta * sqrt(K * mass), wn = sqrt(K / mass), wd = wn * sqrt(1.0 - zeta * zeta);
+    double tc_exact = 2.0 * acos(zeta) / wd, e_exact = exp(-zeta * wn * tc_exact), t_on, t_sep, v_out;
+    cd_contact_law law = normal_law(K, D, 1.0, 1.0);
+    scene sc = ball_scene(mass, r, gap, v0, &law);
+    cd_error e;
+    cd_data_free(sc.d);
+    sc.m->opt.stepper = CD_STEP_ROS34PW2;
+    sc.d = cd_data_create(sc.m, 0, &e);
+    cr_assert(sc.d, "%s", e.msg);
+    run_impact(&sc, gap / v0 + 2.0 * tc_exact, &t_on, &t_sep, &v_out);
+    cr_log_info("ros34pw2: t_c rel %.1e, e rel %.1e, %ld steps, %ld rhs, %ld Jacobians",
+                fabs(t_sep - t_on - tc_exact) / tc_exact, fabs(v_out / v0 - e_exact) / e_exact, sc.d->stats.nsteps,
+                sc.d->stats.nrhs, sc.d->stats.njac);
+    cr_expect_leq(fabs(t_on - gap / v0), 1e-9, "onset at %.15g", t_on);
+    cr_expect_leq(fabs(t_sep - t_on - tc_exact) / tc_exact, 1e-6, "contact duration %.12g s, exact %.12g s", t_sep - t_on,
+                  tc_exact);
+    cr_expect_leq(fabs(v_out / v0 - e_exact) / e_exact, 1e-6, "restitution %.12g, exact %.12g", v_out / v0, e_exact);
+    cr_expect_gt(sc.d->stats.njac, 0, "the stepper formed its Jacobian");
+    scene_free(&sc);
+}
+
 /* ---- test 2: Hertz impact ------------------------------------------------------
  * m x'' = -K x^{3/2} (D = 0). Energy: (1/2) m x'^2 + (2/5) K x^{5/2} = (1/2) m v0^2,
  * so x_max = (5 m v0^2 / (4 K))^{2/5} and, the motion being symmetric in time

@@ -86,6 +86,7 @@ typedef struct {
     long nwarn_budget;    /* events landed early because the per-call evaluation budget ran out */
     long nrenorm;         /* quaternion renormalisations */
     long nrestart;        /* stepper restarts (input changes, schedule steps, events, state sets) */
+    long njac;            /* Jacobians formed by the ros34pw2 stepper (finite differences on the active set) */
     double h_last, h_min_seen, h_max_seen;
     double eq_residual;   /* equilibrium start: largest generalized acceleration left [m/s^2 | rad/s^2] */
     int eq_iterations;    /* equilibrium start: Newton iterations taken (0 = not used) */

@@ -85,6 +85,7 @@ typedef enum {
 typedef enum {
     CD_STEP_RKF45 = 0, CD_STEP_RKCK, CD_STEP_RK8PD, CD_STEP_RK4IMP, CD_STEP_MSBDF,
     CD_STEP_RK4_FIXED,     /* classic RK4 with fixed step h_fixed (embedding mode) */
+    CD_STEP_ROS34PW2,      /* linearly implicit Rosenbrock-W, order 3(2), L-stable: stiff contact (src/sim/rosw.c) */
     CD_STEP_NTYPES
 } cd_stepper;
 

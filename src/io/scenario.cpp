@@ -2048,6 +2048,7 @@ struct Builder {
         switch (o.stepper) {
         case CD_STEP_RKF45: case CD_STEP_RKCK: per_step = 5; break;
         case CD_STEP_RK8PD: per_step = 12; break;
+        case CD_STEP_ROS34PW2: per_step = 4; break;
         case CD_STEP_RK4_FIXED: per_step = 4; hname = "h_fixed"; h = o.h_fixed; break;
         default: break;
         }

@@ -38,6 +38,7 @@
 #include "../mechanism/actuation.h"
 #include "../kinematics/prescribed.h"
 #include "integ.h"
+#include "rosw.h"
 #include "switch.h"
 
 #include <gsl/gsl_errno.h>
@@ -83,6 +84,7 @@ typedef struct {
     int restart_pending;      /* the next call restarts the stepper (msbdf/rk4imp snapshot) */
     int fixed, history;       /* fixed-step mode; the stepper keeps a history (msbdf, rk4imp) */
     cd_stepper stepper;       /* the one the GSL objects were made for */
+    cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
@@ -138,8 +140,9 @@ void cd_integ_free(void *p)
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
-    /* the struct, then 13 n + nin doubles */
-    return sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double);
+    /* the struct, then 13 n + nin doubles, then the ros34pw2 buffers */
+    return sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double) +
+           (m->opt.stepper == CD_STEP_ROS34PW2 ? cd_rosw_size(m) : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -154,6 +157,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->fd_f0 = p; p += n; I->fd_y = p; p += n; I->k1 = p; p += n; I->k2 = p; p += n;
     I->k3 = p; p += n; I->k4 = p; p += n; I->ytmp = p; p += n; I->y_end = p; p += n;
     I->in_snap = p;
+    p += nin;
     I->nin = (int)nin;
     I->d = d;
     I->sys.function = rhs;
@@ -162,13 +166,15 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->sys.params = I;
     I->stepper = d->opt.stepper;
     I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
-    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP;
+    /* steppers whose next step depends on more than (t, y): a snapshot is a restart point */
+    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP || d->opt.stepper == CD_STEP_ROS34PW2;
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
     case CD_STEP_RK8PD: T = gsl_odeiv2_step_rk8pd; break;
     case CD_STEP_RK4IMP: T = gsl_odeiv2_step_rk4imp; break;
     case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
+    case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
     default: T = NULL; break;
     }
     if (!I->fixed) {
@@ -176,8 +182,15 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
         if (!I->drv) goto nomem;
         I->rtol_set = d->opt.rtol;
         I->atol_set = d->opt.atol;
-        I->loc = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, n);
+        /* the locator: rk8pd, or the stiff stepper itself (an explicit trial
+         * step as long as a stiff step would be unstable) */
+        I->loc = gsl_odeiv2_step_alloc(T == cd_step_ros34pw2 ? T : gsl_odeiv2_step_rk8pd, n);
         if (!I->loc) goto nomem;
+        if (T == cd_step_ros34pw2) {
+            cd_rosw_init(&I->rw, m, d, p + 1);
+            cd_rosw_bind(I->drv->s, &I->rw, 0);
+            cd_rosw_bind(I->loc, &I->rw, 1);
+        }
     }
     return I;
 nomem:
@@ -554,6 +567,7 @@ static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st,
         return 0;
     }
     I->m = m;
+    I->rw.m = m;
     I->nrhs0 = d->stats.nrhs;
     if (I->fixed && d->opt.h_fixed != I->hfix_set) { /* a runtime option: the new fixed step from now on */
         I->h = d->opt.h_fixed;
@@ -726,6 +740,7 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
     cd_status st = advance(m, d, t_end, cb, user, err, &started);
     if (started) remember_end(m, d, I);
     I->m = NULL;
+    I->rw.m = NULL;
     return st;
 }
 
@@ -759,6 +774,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
     if (st == CD_OK) I->step_k++;
     if (started) remember_end(m, d, I);
     I->m = NULL;
+    I->rw.m = NULL;
     return st;
 }
 

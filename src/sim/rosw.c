@@ -1,0 +1,294 @@
+/* ROS34PW2: a linearly implicit Rosenbrock-W method for stiff contact.
+ *
+ * Why: with explicit Runge-Kutta steppers the step in a grasp is capped by
+ * stability, not accuracy: the contact damping on light finger links puts an
+ * eigenvalue near -3e4 1/s, so rk8pd holds h ~ 5/|lambda| whatever the
+ * tolerance (docs/performance.md). A linearly implicit step solves with
+ * (I - h gamma J) once per stage and is stable for any h on such modes.
+ *
+ * The method (Rang and Angermann, BIT 45 (2005) 761-787, "ROS34PW2"): 4
+ * stages, order 3 with an embedded order-2 solution, L-stable, stiffly
+ * accurate, and a W-method: its order holds with any matrix in place of the
+ * exact Jacobian. That is what lets capdyn
+ *   - keep a Jacobian for several steps (CD_ROSW_JAC_AGE accepted steps, or
+ *     until a restart: an event, a mode or input change, a breakpoint);
+ *   - use it on the *active* unknowns only (every generalized coordinate and
+ *     velocity, the joint-friction anchors, and the tangential deflections of
+ *     closed contact slots, at most CD_ROSW_MAX_SLOTS of them): the rest
+ *     (deflections of open slots, whose derivative is 0) are stepped
+ *     explicitly, which is exact for them;
+ *   - ignore df/dt (time enters through schedules, whose steps are
+ *     breakpoints, and through smooth profiles).
+ * The Jacobian is a forward finite difference, one evaluation per active
+ * unknown (opt.fd_eps as for rk4imp/msbdf). The stiffness comes from the
+ * contact forces, whose derivatives are what the difference captures.
+ *
+ * Stages (increments k_i include h; gamma the diagonal):
+ *   (I - h gamma J) k_i = h f(t + a_i h, y + sum_j alpha_ij k_j) + h J sum_j gamma_ij k_j
+ *   y1 = y + sum b_i k_i,   error = sum (b_i - bhat_i) k_i.
+ * f(t, y) comes from the driver (can_use_dydt_in), so a step costs 3 new
+ * evaluations plus the Jacobian when it is renewed. dydt_out, used by GSL's
+ * standard control only to scale the tolerance (a_dydt h |y'|), is the last
+ * stage's derivative, taken at t + h on the stiffly accurate stage point. */
+#include "rosw.h"
+#include "../math/cd_math.h"
+
+#include <gsl/gsl_errno.h>
+#include <gsl/gsl_linalg.h>
+#include <math.h>
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define GAM 0.435866521508459
+static const double ALPHA[4][3] = {
+    {0, 0, 0}, {0.87173304301691801, 0, 0}, {0.84457060015369423, -0.11299064236484185, 0}, {0, 0, 1}};
+static const double GAMMA[4][3] = {{0, 0, 0},
+                                   {-0.87173304301691801, 0, 0},
+                                   {-0.90338057013044082, 0.054180672388095326, 0},
+                                   {0.24212380706095346, -1.2232505839045147, 0.54526025533510214}};
+static const double B[4] = {0.24212380706095346, -1.2232505839045147, 1.5452602553351020, GAM};
+static const double BHAT[4] = {0.37810903145819369, -0.096042292212423178, 0.5, 0.2179332607542295};
+
+static int na_capacity(const cd_model *m)
+{
+    int ns = m->nslot < CD_ROSW_MAX_SLOTS ? m->nslot : CD_ROSW_MAX_SLOTS;
+    return m->ny_slot_adr + 3 * ns + m->nfric;
+}
+
+size_t cd_rosw_size(const cd_model *m)
+{
+    size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
+    return 16 + (2 * na * na + 9 * n + na) * sizeof(double) + na * (sizeof(size_t) + sizeof(int)) + 16;
+}
+
+void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
+{
+    size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
+    double *p = (double *)(void *)(((uintptr_t)mem + 15) & ~(uintptr_t)15);
+    int i;
+    memset(w, 0, sizeof *w);
+    w->m = NULL; (void)m; /* set per call */
+    w->d = d;
+    w->ny = m->ny;
+    w->na_max = (int)na - 1;
+    w->J = p; p += na * na;
+    w->W = p; p += na * na;
+    for (i = 0; i < 4; i++) { w->k[i] = p; p += n; }
+    w->g = p; p += n;
+    w->ytmp = p; p += n;
+    w->fs = p; p += n;
+    w->fd = p; p += n;
+    w->r = p; p += n;   /* na <= ny entries used */
+    w->perm = (size_t *)(void *)p;
+    w->act = (int *)(void *)(w->perm + na);
+}
+
+void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; }
+
+/* the active set at the current modes */
+static void active_set(cd_rosw *w)
+{
+    const cd_model *m = w->m;
+    const cd_data *d = w->d;
+    int i, k, ns = 0, na = 0;
+    for (i = 0; i < m->ny_slot_adr; i++) w->act[na++] = i;
+    for (k = 0; k < m->nslot && ns < CD_ROSW_MAX_SLOTS; k++)
+        if (d->slot_mode[k] != CD_MODE_OPEN) {
+            for (i = 0; i < 3; i++) w->act[na++] = m->ny_slot_adr + 3 * k + i;
+            ns++;
+        }
+    for (i = 0; i < m->nfric; i++) w->act[na++] = m->ny_fric_adr + i;
+    w->na = na;
+}
+
+/* forward-difference Jacobian of f on the active set at (t, y), f0 = f(t, y) */
+static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys)
+{
+    int a, c, na, n = w->ny;
+    double eps = w->d->opt.fd_eps;
+    active_set(w);
+    na = w->na;
+    memcpy(w->ytmp, y, (size_t)n * sizeof(double));
+    for (c = 0; c < na; c++) {
+        int j = w->act[c];
+        double h = eps * (fabs(y[j]) > 1.0 ? fabs(y[j]) : 1.0);
+        w->ytmp[j] = y[j] + h;
+        h = w->ytmp[j] - y[j]; /* the representable increment */
+        if (GSL_ODEIV_FN_EVAL(sys, t, w->ytmp, w->fd) != GSL_SUCCESS) return GSL_EBADFUNC;
+        for (a = 0; a < na; a++) w->J[a * na + c] = (w->fd[w->act[a]] - f0[w->act[a]]) / h;
+        w->ytmp[j] = y[j];
+    }
+    w->jac_ok = 1;
+    w->lu_ok = 0;
+    w->jac_t = t;
+    w->jac_age = 0;
+    w->d->stats.njac++;
+    return GSL_SUCCESS;
+}
+
+static int factor(cd_rosw *w, double h)
+{
+    int na = w->na, i, s;
+    gsl_matrix_view W;
+    gsl_permutation P;
+    for (i = 0; i < na * na; i++) w->W[i] = -h * GAM * w->J[i];
+    for (i = 0; i < na; i++) w->W[i * na + i] += 1.0;
+    if (na == 0) { w->lu_ok = 1; w->lu_h = h; return GSL_SUCCESS; }
+    W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
+    P.size = (size_t)na;
+    P.data = w->perm;
+    if (gsl_linalg_LU_decomp(&W.matrix, &P, &s) != GSL_SUCCESS) return GSL_FAILURE;
+    for (i = 0; i < na; i++)
+        if (!(fabs(w->W[i * na + i]) > 0) || !isfinite(w->W[i * na + i])) return GSL_FAILURE;
+    w->lu_ok = 1;
+    w->lu_h = h;
+    return GSL_SUCCESS;
+}
+
+typedef struct {
+    cd_rosw *w;
+    int locator;
+    int have_prev;
+    double t_prev;
+} rosw_state;
+
+static void *rosw_alloc(size_t dim)
+{
+    rosw_state *s = (rosw_state *)calloc(1, sizeof *s);
+    (void)dim;
+    if (!s) GSL_ERROR_NULL("failed to allocate the ROS34PW2 state", GSL_ENOMEM);
+    return s;
+}
+
+static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], double yerr[], const double dydt_in[],
+                      double dydt_out[], const gsl_odeiv2_system *sys)
+{
+    rosw_state *s = (rosw_state *)vs;
+    cd_rosw *w = s->w;
+    int n = (int)dim, i, j, a, c, na;
+    const double *f0;
+    if (!w || n != w->ny) return GSL_EINVAL;
+    if (dydt_in) {
+        f0 = dydt_in;
+    } else {
+        if (GSL_ODEIV_FN_EVAL(sys, t, y, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
+        f0 = w->fs;
+    }
+    if (!s->locator) {
+        /* a retry at the same start (the last step was rejected) renews an old Jacobian */
+        int retry = s->have_prev && s->t_prev == t;
+        if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE || (retry && w->jac_t != t))
+            if (jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
+        s->have_prev = 1;
+        s->t_prev = t;
+    } else if (!w->jac_ok) {
+        if (jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
+    }
+    na = w->na;
+    if (!w->lu_ok || w->lu_h != h)
+        if (factor(w, h) != GSL_SUCCESS) return GSL_FAILURE;
+    for (i = 0; i < 4; i++) {
+        double *k = w->k[i], ai = 0;
+        const double *F;
+        if (i == 0) {
+            F = f0;
+        } else {
+            memcpy(w->ytmp, y, (size_t)n * sizeof(double));
+            for (j = 0; j < i; j++) {
+                ai += ALPHA[i][j];
+                if (ALPHA[i][j] != 0)
+                    for (c = 0; c < n; c++) w->ytmp[c] += ALPHA[i][j] * w->k[j][c];
+            }
+            if (GSL_ODEIV_FN_EVAL(sys, t + ai * h, w->ytmp, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
+            F = w->fs;
+        }
+        /* k = h F (+ h J g on the active rows), then the solve on the active set */
+        if (i > 0) {
+            memset(w->g, 0, (size_t)n * sizeof(double));
+            for (j = 0; j < i; j++)
+                for (a = 0; a < na; a++) w->g[w->act[a]] += GAMMA[i][j] * w->k[j][w->act[a]];
+        }
+        for (c = 0; c < n; c++) k[c] = h * F[c];
+        if (na) {
+            gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
+            gsl_vector_view r = gsl_vector_view_array(w->r, (size_t)na);
+            gsl_permutation P;
+            P.size = (size_t)na;
+            P.data = w->perm;
+            for (a = 0; a < na; a++) {
+                double acc = k[w->act[a]];
+                if (i > 0) {
+                    const double *Ja = w->J + (size_t)a * (size_t)na;
+                    double jg = 0;
+                    for (c = 0; c < na; c++) jg += Ja[c] * w->g[w->act[c]];
+                    acc += h * jg;
+                }
+                w->r[a] = acc;
+            }
+            if (gsl_linalg_LU_svx(&W.matrix, &P, &r.vector) != GSL_SUCCESS) return GSL_FAILURE;
+            for (a = 0; a < na; a++) k[w->act[a]] = w->r[a];
+        }
+        for (c = 0; c < n; c++)
+            if (!isfinite(k[c])) return GSL_FAILURE;
+    }
+    for (c = 0; c < n; c++) {
+        double dy = 0, e = 0;
+        for (i = 0; i < 4; i++) {
+            dy += B[i] * w->k[i][c];
+            e += (B[i] - BHAT[i]) * w->k[i][c];
+        }
+        y[c] += dy;
+        yerr[c] = e;
+    }
+    if (na) { /* the error estimate filtered by (I - h gamma J)^-1: stiff components, which
+               * the L-stable solution damps but the embedded one does not, do not count */
+        gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
+        gsl_vector_view r = gsl_vector_view_array(w->r, (size_t)na);
+        gsl_permutation P;
+        P.size = (size_t)na;
+        P.data = w->perm;
+        for (a = 0; a < na; a++) w->r[a] = yerr[w->act[a]];
+        if (gsl_linalg_LU_svx(&W.matrix, &P, &r.vector) != GSL_SUCCESS) return GSL_FAILURE;
+        for (a = 0; a < na; a++) yerr[w->act[a]] = w->r[a];
+    }
+    if (dydt_out && GSL_ODEIV_FN_EVAL(sys, t + h, y, dydt_out) != GSL_SUCCESS) return GSL_EBADFUNC;
+    if (!s->locator) w->jac_age++;
+    return GSL_SUCCESS;
+}
+
+static int rosw_set_driver(void *vs, const gsl_odeiv2_driver *d)
+{
+    (void)vs;
+    (void)d;
+    return GSL_SUCCESS;
+}
+
+static int rosw_reset(void *vs, size_t dim)
+{
+    rosw_state *s = (rosw_state *)vs;
+    (void)dim;
+    s->have_prev = 0;
+    if (s->w && !s->locator) cd_rosw_invalidate(s->w);
+    return GSL_SUCCESS;
+}
+
+static unsigned int rosw_order(void *vs)
+{
+    (void)vs;
+    return 3;
+}
+
+static void rosw_free(void *vs) { free(vs); }
+
+static const gsl_odeiv2_step_type rosw_type = {"ros34pw2", 1, 1, rosw_alloc, rosw_apply, rosw_set_driver,
+                                               rosw_reset, rosw_order, rosw_free};
+const gsl_odeiv2_step_type *cd_step_ros34pw2 = &rosw_type;
+
+void cd_rosw_bind(gsl_odeiv2_step *s, cd_rosw *w, int locator)
+{
+    rosw_state *st = (rosw_state *)s->state;
+    st->w = w;
+    st->locator = locator;
+    st->have_prev = 0;
+}

@@ -1,0 +1,41 @@
+/* Internal: the linearly implicit Rosenbrock-W stepper ROS34PW2 (rosw.c). */
+#ifndef CD_ROSW_H
+#define CD_ROSW_H
+#include "capdyn/sim.h"
+#include <gsl/gsl_odeiv2.h>
+#include <stddef.h>
+
+/* Closed contact slots whose 3 tangential deflections join the implicit
+ * (active) set; slots closed beyond this many are treated explicitly (a
+ * W-method stays of order 3 with any approximate Jacobian). */
+#define CD_ROSW_MAX_SLOTS 96
+/* Accepted steps a Jacobian is kept before it is recomputed. */
+#define CD_ROSW_JAC_AGE 20
+
+typedef struct {
+    const cd_model *m;        /* set for the duration of one call (as the integrator's) */
+    cd_data *d;
+    int ny, na_max, na;       /* state size; active unknowns: capacity, current */
+    int *act;                 /* (na_max) their indices in y */
+    double *J, *W;            /* (na_max^2) Jacobian on the active set; iteration matrix, LU */
+    size_t *perm;             /* (na_max) */
+    double *k[4], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny); r: (na_max) */
+    int jac_ok, lu_ok;        /* J valid; W holds the LU of I - h gamma J for h = lu_h */
+    double jac_t, lu_h;
+    long jac_age;             /* accepted steps since J was computed */
+} cd_rosw;
+
+/* Bytes of the buffers of cd_rosw_init (16-aligned start). */
+size_t cd_rosw_size(const cd_model *m);
+/* Lays the buffers out in mem. */
+void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem);
+/* The next step recomputes the Jacobian (a restart: modes, inputs or state changed). */
+void cd_rosw_invalidate(cd_rosw *w);
+
+/* The GSL stepper type. Each step object must be bound to the workspace;
+ * a locator's steps share the Jacobian of the main stepper's step start and
+ * never invalidate it. */
+extern const gsl_odeiv2_step_type *cd_step_ros34pw2;
+void cd_rosw_bind(gsl_odeiv2_step *s, cd_rosw *w, int locator);
+
+#endif
