@@ -22,6 +22,7 @@
  * p; the shape's own pose on its body only changes the frame. */
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
+#include "scene_util.h"
 #include <math.h>
 #include <string.h>
 
@@ -403,4 +404,136 @@ Test(contact_geometry, convex_hull_is_exact_like_the_box)
         cr_expect_leq(fabs(n[0] - 1.0 / sqrt(3.0)), 1e-15);
         cd_model_free(t);
     }
+}
+
+/* ---- the hull query's pruning and the broad phase of open slots ---------- */
+
+/* nearest point of triangle abc to p (by regions: vertices, edges, face) */
+static void tri_closest(const double p[3], const double a[3], const double b[3], const double c[3], double q[3])
+{
+    double ab[3], ac[3], ap[3], bp[3], cp[3], d1, d2, d3, d4, d5, d6, va, vb, vc, v, w, den;
+    int k;
+    for (k = 0; k < 3; k++) { ab[k] = b[k] - a[k]; ac[k] = c[k] - a[k]; ap[k] = p[k] - a[k]; bp[k] = p[k] - b[k]; cp[k] = p[k] - c[k]; }
+#define DOT3(x, y) ((x)[0] * (y)[0] + (x)[1] * (y)[1] + (x)[2] * (y)[2])
+    d1 = DOT3(ab, ap); d2 = DOT3(ac, ap);
+    if (d1 <= 0 && d2 <= 0) { memcpy(q, a, 3 * sizeof(double)); return; }
+    d3 = DOT3(ab, bp); d4 = DOT3(ac, bp);
+    if (d3 >= 0 && d4 <= d3) { memcpy(q, b, 3 * sizeof(double)); return; }
+    vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) { v = d1 / (d1 - d3); for (k = 0; k < 3; k++) q[k] = a[k] + v * ab[k]; return; }
+    d5 = DOT3(ab, cp); d6 = DOT3(ac, cp);
+    if (d6 >= 0 && d5 <= d6) { memcpy(q, c, 3 * sizeof(double)); return; }
+    vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) { w = d2 / (d2 - d6); for (k = 0; k < 3; k++) q[k] = a[k] + w * ac[k]; return; }
+    va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        for (k = 0; k < 3; k++) q[k] = b[k] + w * (c[k] - b[k]);
+        return;
+    }
+    den = 1.0 / (va + vb + vc);
+    v = vb * den; w = vc * den;
+    for (k = 0; k < 3; k++) q[k] = a[k] + ab[k] * v + ac[k] * w;
+#undef DOT3
+}
+
+Test(contact_geometry, hull_query_outside_equals_the_scan_over_every_face)
+{
+    /* A hull of 300 random points on an ellipsoid (hundreds of faces): for
+     * 3000 random outside points the query, which only looks at faces that
+     * face p and stops at faces no nearer than its best, must give the
+     * distance of the brute-force minimum over every face triangle, to 1e-12. */
+    cd_model *m = cd_model_create();
+    cd_system_desc s = cd_system_desc_default();
+    cd_error e;
+    double verts[3 * 300], worst = 0;
+    int sys, sh, i, k, nout = 0;
+    s.type = CD_BASE_FIXED;
+    s.name = "hull";
+    sys = cd_model_add_system(m, &s, &e);
+    rng_state = 0x853C49E6748FEA9BULL;
+    for (i = 0; i < 300; i++) {
+        double u[3], n;
+        do {
+            for (k = 0; k < 3; k++) u[k] = 2.0 * urand() - 1.0;
+            n = sqrt(u[0] * u[0] + u[1] * u[1] + u[2] * u[2]);
+        } while (n < 0.1 || n > 1.0);
+        verts[3 * i] = 0.3 * u[0] / n; verts[3 * i + 1] = 0.2 * u[1] / n; verts[3 * i + 2] = 0.12 * u[2] / n;
+    }
+    sh = cd_model_add_shape(m, m->sys_body_adr[sys], CD_SHAPE_CONVEX, NULL, NULL, NULL, verts, 300, &e);
+    cr_assert(sh >= 0, "%s", e.msg);
+    cr_assert_eq(cd_model_finalize(m, &e), CD_OK, "%s", e.msg);
+    cr_log_info("hull: %d faces", m->shape_face_num[sh]);
+    for (i = 0; i < 3000; i++) {
+        double p[3], d, n[3], sp[3], best = HUGE_VAL;
+        int f;
+        for (k = 0; k < 3; k++) p[k] = (2.0 * urand() - 1.0) * 0.5;
+        cr_assert_eq(cd_shape_distance(m, sh, p, 0.0, &d, n, sp), 0);
+        if (d <= 0) continue;
+        nout++;
+        for (f = 0; f < m->shape_face_num[sh]; f++) {
+            const int *fv = m->face_vert + 3 * (m->shape_face_adr[sh] + f);
+            double q[3], dd;
+            tri_closest(p, m->vert + 3 * fv[0], m->vert + 3 * fv[1], m->vert + 3 * fv[2], q);
+            dd = sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2]));
+            if (dd < best) best = dd;
+        }
+        if (fabs(d - best) > worst) worst = fabs(d - best);
+    }
+    cr_log_info("%d outside points, largest difference to the full scan %.3g m", nout, worst);
+    cr_expect_gt(nout, 1000, "most sample points are outside the hull");
+    cr_expect_leq(worst, 1e-12, "pruned query vs full scan: %.3g m", worst);
+    cd_model_free(m);
+}
+
+Test(contact_geometry, broad_phase_keeps_open_slots_open_and_onsets_exact)
+{
+    /* A ball (check sphere r = 0.05) flies at 1 m/s along -x toward a box
+     * hull (half extents 0.3, 0.4, 0.5; bounding sphere sqrt(0.5) = 0.707)
+     * from x = 3: while it is outside the bounding sphere the slot's x is the
+     * gap to that sphere (culled: no hull query), never above -1e-6 and never
+     * below the true x; the onset is at (3 - 0.3 - 0.05) / 1 = 2.65 s to
+     * 1e-9 s, located through the exact query once the ball is inside. */
+    cd_model *m = cd_model_create();
+    cd_error e;
+    cd_data *d;
+    double verts[24], pos[3] = {3.0, 0, 0}, vel[3] = {-1.0, 0, 0}, zero[3] = {0, 0, 0};
+    int ground, ball, sh, i, lid;
+    cd_contact_law law = cd_contact_law_default();
+    ground = add_system(m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    for (i = 0; i < 8; i++) {
+        verts[3 * i] = (i & 1) ? BOX_H[0] : -BOX_H[0];
+        verts[3 * i + 1] = (i & 2) ? BOX_H[1] : -BOX_H[1];
+        verts[3 * i + 2] = (i & 4) ? BOX_H[2] : -BOX_H[2];
+    }
+    sh = cd_model_add_shape(m, m->sys_body_adr[ground], CD_SHAPE_CONVEX, NULL, NULL, NULL, verts, 8, &e);
+    cr_assert(sh >= 0, "%s", e.msg);
+    ball = add_system(m, "ball", CD_BASE_FREE, 1.0, 1e-3, pos, vel, NULL);
+    cr_assert(cd_model_add_checkpoint(m, m->sys_body_adr[ball], zero, 0.05, &e) >= 0, "%s", e.msg);
+    law.K = 1e4; law.D = 50; law.mu_s = law.mu_k = 0;
+    lid = cd_model_add_law(m, &law, &e);
+    cr_assert(lid >= 0, "%s", e.msg);
+    cr_assert(cd_model_add_pair(m, ball, -1, sh, lid, &e) >= 0, "%s", e.msg);
+    m->gravity[0] = m->gravity[1] = m->gravity[2] = 0;
+    cr_assert_eq(cd_model_finalize(m, &e), CD_OK, "%s", e.msg);
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    for (i = 1; i <= 26; i++) { /* to t = 2.6 s: still open */
+        double p[3], dist, n[3], s[3], xt;
+        cr_assert_eq(cd_sim_advance(m, d, 0.1 * i, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cr_assert_eq(d->slot_mode[0], CD_MODE_OPEN, "t = %g", d->t);
+        p[0] = cd_state_of(m, d, ball).pos[0]; p[1] = p[2] = 0;
+        cr_assert_eq(cd_shape_distance(m, sh, p, 0.05, &dist, n, s), 0);
+        xt = 0.05 - dist;
+        cr_expect_leq(d->slot_x[0], -1e-6, "t = %g: x %.17g", d->t, d->slot_x[0]);
+        cr_expect_geq(d->slot_x[0], xt - 1e-15, "t = %g: x %.17g below the true %.17g", d->t, d->slot_x[0], xt);
+        if (p[0] - 0.05 > sqrt(0.5) + 1e-6 + 1e-3)
+            cr_expect_gt(d->slot_x[0], xt + 1e-3, "t = %g: culled (x is the gap to the bounding sphere)", d->t);
+    }
+    cr_assert_eq(cd_sim_advance(m, d, 2.7, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_geq(d->ev_count, 1);
+    cr_expect_eq(cd_data_event(d, 0)->kind, CD_EV_ONSET);
+    cr_expect_leq(fabs(cd_data_event(d, 0)->t - 2.65), 1e-9, "onset at %.15g s", cd_data_event(d, 0)->t);
+    cd_data_free(d);
+    cd_model_free(m);
 }

@@ -364,6 +364,7 @@ typedef struct cd_model {
     double *shape_pos;    /* (nshape x 3) in the body frame [m] */
     double *shape_rot;    /* (nshape x 9) shape frame -> body frame */
     double *shape_size;   /* (nshape x 3), meaning per type */
+    double *shape_rbound; /* (nshape) radius about the shape origin holding the whole shape [m]; HUGE_VAL: plane */
     int *shape_vert_adr, *shape_vert_num;
     double *vert;         /* (nvert x 3) shape frame [m] */
     int nface;            /* hull faces of the convex shapes, built at finalize */

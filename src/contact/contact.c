@@ -62,6 +62,32 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
     return res;
 }
 
+/* Broad phase of an OPEN slot: a check point (radius r) farther than
+ * CD_BROAD_MARGIN from the shape's bounding sphere cannot touch it, so the
+ * exact query is skipped and the gap to that sphere stands in: dist is a
+ * lower bound of the true distance (x = r - dist stays below
+ * -CD_BROAD_MARGIN: the slot stays open, its switching function positive,
+ * exactly as with the true distance), n and s point from the sphere's centre.
+ * Returns 1 when culled, 0 when the exact query is needed. */
+#define CD_BROAD_MARGIN 1e-6
+static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r, double *dist,
+                    double n[3], double s[3])
+{
+    int b = m->shape_body[sh];
+    double xs[3], t[3], dd, rb = m->shape_rbound[sh];
+    if (!(rb < HUGE_VAL)) return 0;
+    cd_m3_mulv(t, d->body_R + 9 * b, m->shape_pos + 3 * sh);
+    cd_v3_add(xs, d->body_x + 3 * b, t);
+    cd_v3_sub(t, pw, xs);
+    dd = cd_v3_norm(t);
+    if (!(dd - rb > r + CD_BROAD_MARGIN)) return 0;
+    *dist = dd - rb;
+    cd_v3_scale(n, t, 1.0 / dd);
+    cd_v3_copy(s, xs);
+    cd_v3_axpy(s, rb, n);
+    return 1;
+}
+
 int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
                       double *dist, double n[3], double s[3])
 {
@@ -110,7 +136,8 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
         double *z = d->y + m->ny_slot_adr + 3 * k;
         cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
-        res = query_world(m, d, sh, pw, r, &dist, n, s);
+        if (mode == CD_MODE_OPEN && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
+        else res = query_world(m, d, sh, pw, r, &dist, n, s);
         d->slot_geomfail[k] = (res < 0);
         zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
         if (res != 0) {

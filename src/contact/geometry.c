@@ -180,11 +180,22 @@ int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, co
         cd_v3_axpy(s, -hmax, n);
         return 0;
     }
-    /* outside: the nearest point over the face triangles */
+    /* outside: the nearest point over the face triangles. Only faces whose
+     * plane p is in front of (h > 0) can hold it (p - q lies in the normal
+     * cone at q, so some face through q has n.(p - q) > 0, i.e. h > 0), and a
+     * face is no nearer than its plane (distance >= h): start from the face
+     * of largest h and skip every face with h^2 >= the best squared distance.
+     * Exact: the same minimum as the scan over every face. */
     {
-        double dmin = HUGE_VAL, q[3], t[3];
+        double dmin, q[3], t[3];
+        const int *b3 = fv + 3 * best;
+        closest_on_triangle(p, vert + 3 * b3[0], vert + 3 * b3[1], vert + 3 * b3[2], q);
+        cd_v3_sub(t, p, q);
+        dmin = cd_v3_dot(t, t);
+        cd_v3_copy(s, q);
         for (f = 0; f < nf; f++) {
-            double dd;
+            double dd, h = cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
+            if (f == best || h <= 0 || h * h >= dmin) continue;
             closest_on_triangle(p, vert + 3 * fv[3 * f], vert + 3 * fv[3 * f + 1], vert + 3 * fv[3 * f + 2], q);
             cd_v3_sub(t, p, q);
             dd = cd_v3_dot(t, t);

@@ -200,7 +200,7 @@ void cd_model_free(cd_model *m)
     free(m->fjnt_sync); free(m->fjnt_ratio); free(m->finger_prm); free(m->finger_tbl_adr); free(m->finger_tbl_n);
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
-    free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert);
+    free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert); free(m->shape_rbound);
     free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
     free(m->law); free(m->pair_sys); free(m->pair_body); free(m->pair_shape); free(m->pair_law);
     free(m->slot_cp); free(m->slot_shape); free(m->slot_law);
@@ -504,7 +504,7 @@ int cd_model_add_shape(cd_model *m, int body, cd_shape_type type, const double p
     n = id + 1;
     ok |= RS(m->shape_body, n); ok |= RS(m->shape_type, n); ok |= RS(m->shape_pos, 3 * n);
     ok |= RS(m->shape_rot, 9 * n); ok |= RS(m->shape_size, 3 * n); ok |= RS(m->shape_vert_adr, n);
-    ok |= RS(m->shape_vert_num, n);
+    ok |= RS(m->shape_vert_num, n); ok |= RS(m->shape_rbound, n);
     if (ok) { seterr(err, CD_ENOMEM, "out of memory"); return -1; }
     if (type == CD_SHAPE_CONVEX) {
         if (RS(m->vert, 3 * (m->nvert + nvert))) {
@@ -524,6 +524,21 @@ int cd_model_add_shape(cd_model *m, int body, cd_shape_type type, const double p
     if (pos) cd_v3_copy(m->shape_pos + 3 * id, pos); else cd_v3_zero(m->shape_pos + 3 * id);
     cd_m3_copy(m->shape_rot + 9 * id, R);
     cd_v3_copy(m->shape_size + 3 * id, sz);
+    /* bounding sphere about the shape origin (broad phase of open slots, contact.c) */
+    switch (type) {
+    case CD_SHAPE_SPHERE: m->shape_rbound[id] = sz[0]; break;
+    case CD_SHAPE_BOX: m->shape_rbound[id] = cd_v3_norm(sz); break;
+    case CD_SHAPE_CYLINDER: m->shape_rbound[id] = sqrt(sz[0] * sz[0] + sz[1] * sz[1]); break;
+    case CD_SHAPE_CAPSULE: m->shape_rbound[id] = sz[0] + sz[1]; break;
+    case CD_SHAPE_CONVEX:
+        m->shape_rbound[id] = 0;
+        for (i = 0; i < nvert; i++) {
+            double r = cd_v3_norm(verts + 3 * i);
+            if (r > m->shape_rbound[id]) m->shape_rbound[id] = r;
+        }
+        break;
+    default: m->shape_rbound[id] = HUGE_VAL; break;
+    }
     m->nshape++;
     return id;
 }
