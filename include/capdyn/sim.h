@@ -107,6 +107,37 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end,
  * A schedule breakpoint inside the step splits it: 4 more evaluations each. */
 cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err);
 
+/* ---- dense output: samples by interpolation (src/sim/sampler.c) ----------
+ * A run sampled every dt need not stop the integrator at every sample: call
+ * cd_sim_advance once over the whole span with a step callback that calls
+ * cd_sampler_update. Every sample time t_k = t_first + k dt inside the last
+ * step (t_prev, t] gets the cubic Hermite interpolant of the step's end
+ * states and derivatives (with the step's modes: an event ends a step, so
+ * the modes are constant inside it), evaluated on the sampler's own data
+ * (cd_forward: every output of the sample is that of the interpolated
+ * state), and passed to fn. The interpolation error is O(h^4 y'''') of the
+ * step h, third order: below the step's own error for steps the error
+ * control accepts (docs/dynamics.md, "Dense output"). The sampler's
+ * evaluations are not counted in d->stats. Allocates at create only. */
+typedef struct cd_sampler cd_sampler;
+/* Called for each sample; `sample` holds the interpolated state, evaluated.
+ * Return non-zero to stop (cd_sampler_update then returns it). */
+typedef int (*cd_sample_fn)(const cd_model *m, const cd_data *sample, void *user);
+cd_sampler *cd_sampler_create(const cd_model *m, cd_error *err);
+void cd_sampler_free(cd_sampler *s);
+/* Starts at d's current state (evaluated, e.g. right after cd_data_create or
+ * a step callback); samples at t_first + k dt, k = 0, 1, ..., those <= d->t
+ * excluded. CD_EINVAL for dt <= 0 or non-finite times. */
+cd_status cd_sampler_begin(cd_sampler *s, const cd_model *m, const cd_data *d, double t_first, double dt,
+                           cd_error *err);
+/* After an accepted step or an event (d evaluated at its end, as in a step
+ * callback): emits every sample in (t_prev, d->t] in order, then takes d's
+ * state as the start of the next step. Returns 0, fn's non-zero value, or
+ * -1 if a sample state cannot be evaluated (non-finite). */
+int cd_sampler_update(cd_sampler *s, const cd_model *m, const cd_data *d, cd_sample_fn fn, void *user);
+/* The next sample time. */
+double cd_sampler_next(const cd_sampler *s);
+
 
 #ifdef __cplusplus
 }

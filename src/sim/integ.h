@@ -22,6 +22,9 @@ int cd_integ_state_size(const cd_model *m);
 void cd_integ_state_get(const cd_model *m, cd_data *d, double *buf);
 void cd_integ_state_set(const cd_model *m, cd_data *d, const double *buf);
 
+/* dst takes what an evaluation needs of src's state (state.c; the sampler). */
+void cd_state_copy_eval(const cd_model *m, cd_data *dst, const cd_data *src);
+
 /* Static equilibrium of the closed contacts and stops (equilibrium.c). */
 cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err);
 

@@ -111,6 +111,37 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
     return CD_OK;
 }
 
+/* dst takes src's t, y, modes, anchors, guard counters, schedule rows,
+ * inputs and callbacks, not the integrator's part: what an evaluation of
+ * dst needs to give src's outputs (the sampler's scratch data). No allocation. */
+void cd_state_copy_eval(const cd_model *m, cd_data *dst, const cd_data *src)
+{
+    dst->t = src->t;
+    memcpy(dst->y, src->y, (size_t)m->ny * sizeof(double));
+    memcpy(dst->slot_mode, src->slot_mode, (size_t)m->nslot * sizeof(int));
+    memcpy(dst->slot_dir, src->slot_dir, (size_t)3 * m->nslot * sizeof(double));
+    memcpy(dst->sw_tswitch, src->sw_tswitch, (size_t)m->nsw * sizeof(double));
+    memcpy(dst->sw_nswitch, src->sw_nswitch, (size_t)m->nsw * sizeof(int));
+    memcpy(dst->sw_held, src->sw_held, (size_t)m->nsw * sizeof(int));
+    memcpy(dst->lim_mode, src->lim_mode, (size_t)m->nlim * sizeof(int));
+    memcpy(dst->fric_mode, src->fric_mode, (size_t)m->nfric * sizeof(int));
+    memcpy(dst->fric_dir, src->fric_dir, (size_t)m->nfric * sizeof(double));
+    memcpy(dst->user_mode, src->user_mode, (size_t)m->nuser * sizeof(int));
+    memcpy(dst->act_piece, src->act_piece, (size_t)m->nu * sizeof(int));
+    memcpy(dst->finger_mode, src->finger_mode, (size_t)m->nfinger * sizeof(int));
+    memcpy(dst->finger_brake, src->finger_brake, (size_t)m->nfinger * sizeof(double));
+    memcpy(dst->ctrl, src->ctrl, (size_t)m->nu * sizeof(double));
+    memcpy(dst->qfrc_applied, src->qfrc_applied, (size_t)m->nv * sizeof(double));
+    memcpy(dst->xfrc_applied, src->xfrc_applied, (size_t)6 * m->nbody * sizeof(double));
+    memcpy(dst->xfrc_body, src->xfrc_body, (size_t)6 * m->nbody * sizeof(double));
+    dst->control = src->control;
+    dst->control_user = src->control_user;
+    dst->user_switch = src->user_switch;
+    dst->user_transition = src->user_transition;
+    dst->switch_user = src->switch_user;
+    dst->opt = src->opt;
+}
+
 cd_status cd_state_copy(const cd_model *m, cd_data *dst, cd_data *src, cd_error *err)
 {
     /* one temporary buffer from dst's allocator (documented: this call allocates) */
