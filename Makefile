@@ -4,9 +4,18 @@
 
 CC      ?= cc
 CXX     ?= c++
+# MPI=1: capdyn sweep also under mpirun/srun (docs/sweep.md), in its own
+# build directory; Open MPI from scripts/install-mpi-deps.sh (make mpi-deps)
+ifeq ($(MPI),1)
+BUILD   ?= build-mpi
+endif
 BUILD   ?= build
 PKGS_CORE = gsl ccd
 PKGS_IO   = hdf5 tomlplusplus qhull_r
+ifeq ($(MPI),1)
+PKGS_IO  += ompi-c
+EXTRA_CFLAGS += -DCAPDYN_MPI
+endif
 WARN    = -Wall -Wextra -Wpedantic -Werror
 OPT     ?= -O2 -g
 CFLAGS_ALL   = -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
@@ -35,7 +44,7 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps lib cli examples test asan bench demo figures clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli examples test asan bench demo figures clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI)
 
@@ -45,6 +54,7 @@ help:
 	@echo "make test     install deps, build, run every test (Criterion), then every example"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@echo "make MPI=1 [test]  capdyn sweep under mpirun/srun too (build-mpi/; Open MPI: make mpi-deps)"
 	@echo "make bench    benchmarks (bench/)"
 	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
@@ -54,9 +64,18 @@ help:
 
 deps:
 	@bash scripts/install-deps.sh
+ifeq ($(MPI),1)
+	@bash scripts/install-mpi-deps.sh
+endif
+
+mpi-deps:
+	@bash scripts/install-mpi-deps.sh
 
 check-deps:
 	@CAPDYN_NO_INSTALL=1 bash scripts/install-deps.sh || { echo "run 'make deps' first (or 'make test' / 'make demo', which install them)" >&2; exit 1; }
+ifeq ($(MPI),1)
+	@CAPDYN_NO_INSTALL=1 bash scripts/install-mpi-deps.sh || { echo "MPI=1: run 'make mpi-deps' first (Open MPI)" >&2; exit 1; }
+endif
 
 # tests (and only tests) may use POSIX/XSI extras: fork, kill, M_PI, ...
 $(BUILD)/tests/%.o: tests/%.c
@@ -110,7 +129,7 @@ examples: check-deps $(EXAMPLES)
 # every example (a failing example fails the target).
 test: deps
 	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)
-	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
 	@$(MAKE) --no-print-directory install-check
@@ -170,6 +189,6 @@ figures: deps
 	@bash plots/figures.sh
 
 clean:
-	rm -rf build build-asan build-fuzz figures
+	rm -rf build build-asan build-fuzz build-mpi figures
 
 -include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)

@@ -67,6 +67,48 @@ for g in space_gripper_cylinder space_gripper_irregular space_gripper_handrail t
     done
 done
 
+# ---- Issue 9: TAKO vs Space Gripper, the graspable region (docs/sweep.md) ----
+# The same grid for both scenarios (same fingers, object, contact law,
+# torque); REGION_X / REGION_Y override it (A:B:N), SWEEP_ARGS adds options
+# (e.g. "-j 1"), CAPDYN_RUN_ARGS applies too (and makes the default grid 2x3).
+# Positions and areas normalised by the finger length 0.15 m.
+REGION_L=0.15
+if [ -n "${CAPDYN_RUN_ARGS:-}" ]; then # a quick look: a 2x3 grid of shortened runs
+    RX=${REGION_X:--0.006:0.006:2}
+    RY=${REGION_Y:-0.07:0.17:3}
+else
+    RX=${REGION_X:--0.006:0.006:5}
+    RY=${REGION_Y:-0.07:0.17:11}
+fi
+read -r -a SWEEP_EXTRA <<< "${SWEEP_ARGS:-}"
+for g in tako space; do
+    sc=scenarios/tako_vs_space_region.toml
+    [ "$g" = space ] && sc=scenarios/tako_vs_space_region_space.toml
+    echo "== region_$g: capdyn sweep $sc (x $RX, y $RY)"
+    "$CAPDYN" sweep "$sc" --vary "target.object.position[0]=$RX" --vary "target.object.position[1]=$RY" \
+        --until-verdict --length "$REGION_L" -q -o "$D/region_$g.h5" ${RUN_ARGS[@]+"${RUN_ARGS[@]}"} \
+        ${SWEEP_EXTRA[@]+"${SWEEP_EXTRA[@]}"}
+    "$CAPDYN" sweep --table "$D/region_$g.h5" > "$D/region_$g.dat"
+done
+# the hand at its initial pose (a 1 ms run of the scenario)
+"$CAPDYN" run scenarios/tako_vs_space_region.toml --set simulation.duration=0.001 -q -o "$D/region_pose.h5"
+"$CAPDYN" export "$D/region_pose.h5" outline --at 0 > "$D/region_outline.dat"
+area_t=$(sed -n 's/^# region .* area //p' "$D/region_tako.dat")
+area_s=$(sed -n 's/^# region .* area //p' "$D/region_space.dat")
+echo "   region area / L^2: TAKO $area_t, Space Gripper $area_s"
+for ext in png svg; do
+    for m in verdict peak_fn t_capture; do
+        case $m in
+            verdict) what="capture verdict" ;;
+            peak_fn) what="peak contact force on the object" ;;
+            t_capture) what="time to capture" ;;
+        esac
+        gnuplot -c plots/region.gp "$D/region_tako.dat" "$D/region_space.dat" "$D/region_outline.dat" \
+            "$OUT/region_$m.$ext" "$m" "$REGION_L" "TAKO (region area $area_t L^2)" \
+            "Space Gripper (region area $area_s L^2)" "Graspable region: $what over the object's initial position"
+    done
+done
+
 echo "figures written to $OUT/:"
 ls -1 "$OUT" | grep -v '^data$' | sed 's/^/  /'
 echo "(results and exported columns in $D/)"

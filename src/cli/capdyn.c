@@ -38,6 +38,8 @@ static const char *top_help =
     "  check SCENARIO.toml [--set KEY=VALUE ...]\n"
     "                     validate a scenario without running it\n"
     "  info RESULTS.h5    summary of a results file\n"
+    "  sweep SCENARIO.toml --vary KEY=A:B:N|V1,V2,... [-j N] [-o SUMMARY.h5]\n"
+    "                     many variants on every core, one HDF5 summary\n"
     "  export RESULTS.h5 WHAT [options]\n"
     "                     columns of text for gnuplot (time, system NAME, contacts,\n"
     "                     slot N, slots, events, diagnostics, outline, checkpoints)\n"
@@ -215,7 +217,8 @@ int main(int argc, char **argv)
         if (!strcmp(argv[2], "check")) return cmd_check(2, hv);
         if (!strcmp(argv[2], "info")) return cmd_info(2, hv);
         if (!strcmp(argv[2], "export")) return cmd_export(2, hv);
-        return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export)", argv[2]);
+        if (!strcmp(argv[2], "sweep")) return cmd_sweep(2, hv);
+        return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep)", argv[2]);
     }
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
         printf("capdyn %s\n", cd_version());
@@ -225,6 +228,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "check")) return cmd_check(argc - 1, argv + 1);
     if (!strcmp(cmd, "info")) return isolated(cmd_info, argc - 1, argv + 1);
     if (!strcmp(cmd, "export")) return isolated(cmd_export, argc - 1, argv + 1);
+    if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
     if (cmd[0] == '-') return cli_usage(NULL, "unknown option '%s'", cmd);
-    return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export)", cmd);
+    return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep)", cmd);
 }

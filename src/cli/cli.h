@@ -28,6 +28,39 @@ int cmd_check(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_export(int argc, char **argv);
 
+/* The state of one run's loop (src/cli/run.c): progress bar, the largest
+ * contact forces of every step, the work budget. */
+typedef struct {
+    int progress;          /* draw the bar */
+    double t_end, wall0, last_draw;
+    double *fn_max, *ft_max;
+    int drawn;
+    /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
+     * the step callback stops the run and writes why in budget_msg */
+    double max_wall, max_rhs;
+    char budget_msg[256];
+    int until_verdict;     /* end the run at the monitor's verdict (capdyn sweep --until-verdict) */
+} run_ctx;
+
+/* The run loop of capdyn run, shared with capdyn sweep: the state at t = 0
+ * counts for c's maxima; the integrator is advanced to every sample time
+ * (k output_dt, the last exactly at the duration) with cd_sim_advance, the
+ * monitor (may be NULL) looks at every sample, w (may be NULL: no file)
+ * receives every sample and is flushed every flush_every seconds; the step
+ * callback enforces the work budget. Ends early (CD_OK) at the monitor's
+ * verdict if c->until_verdict. Stops on a failure, a spent budget or
+ * SIGINT/SIGTERM caught by capdyn run. Returns the run status; *err says why
+ * it stopped (a spent budget: c->budget_msg); wmsg (wlen bytes) receives the
+ * first write error of w ("" if none). The caller fills c (fn_max, ft_max
+ * of nslot, t_end, wall0, budget) and closes w. */
+cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_monitor *mon, run_ctx *c,
+                       cd_error *err, char *wmsg, size_t wlen);
+/* The verdict and figures of merit of a monitor at the end of a run
+ * (verdict name static; epsilon NaN if the grasp analysis fails). */
+void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, cd_h5_capture *cap);
+
+int cmd_sweep(int argc, char **argv);
+
 /* Facts only the running process knows, added to the file's report. */
 typedef struct {
     double wall;                /* wall time of the run [s] */

@@ -70,17 +70,6 @@ static void restore_signals(const struct sigaction *i, const struct sigaction *t
 /* Most samples a run may ask for (the loader's limit, docs/scenario-format.md). */
 #define CLI_MAX_SAMPLES 1e9
 
-typedef struct {
-    int progress;          /* draw the bar */
-    double t_end, wall0, last_draw;
-    double *fn_max, *ft_max;
-    int drawn;
-    /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
-     * the step callback stops the run and writes why in budget_msg */
-    double max_wall, max_rhs;
-    char budget_msg[256];
-} run_ctx;
-
 static void draw_progress(run_ctx *c, const cd_data *d, double now)
 {
     char bar[31];
@@ -243,6 +232,75 @@ int cmd_check(int argc, char **argv)
     return CLI_OK;
 }
 
+/* The verdict and figures of merit of a monitor at the end of a run (cli.h). */
+void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, cd_h5_capture *cap)
+{
+    int fc;
+    cd_error qerr;
+    memset(cap, 0, sizeof *cap);
+    cap->verdict = cd_verdict_name(mon->verdict);
+    cap->t = mon->verdict == CD_VERDICT_CAPTURED ? mon->t_capture : mon->verdict == CD_VERDICT_ESCAPED ? mon->t_escape : NAN;
+    cap->peak_fn = mon->peak_fn;
+    cap->peak_tau = mon->peak_tau;
+    memcpy(cap->offset, mon->offset, sizeof cap->offset);
+    cap->n_stick = mon->n_stick;
+    cap->n_slip = mon->n_slip;
+    if (cd_monitor_quality(mon, m, d, &cap->epsilon, &fc, &qerr) != CD_OK) cap->epsilon = NAN;
+}
+
+/* The run loop of capdyn run, shared with capdyn sweep (cli.h). */
+cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_monitor *mon, run_ctx *c,
+                       cd_error *errp, char *wmsg, size_t wlen)
+{
+    const cd_model *m = sc->model;
+    cd_error err, werr;
+    cd_status st = CD_OK;
+    long i, nout;
+    double last_flush, t_last_sample, ratio = sc->duration / sc->output_dt;
+    /* the state at t = 0 counts for the maxima too (contacts closed at start) */
+    (void)step_cb(m, d, c);
+
+    err.status = werr.status = CD_OK;
+    err.msg[0] = werr.msg[0] = 0;
+    if (wlen) wmsg[0] = 0;
+    if (w) st = cd_h5_append(w, m, d, &werr);
+    if (st != CD_OK) err = werr;
+    /* a signal that came while the file was being created */
+    if (st == CD_OK && g_signal) st = CD_EINTERRUPT;
+    t_last_sample = d->t;
+    last_flush = cli_wall();
+    /* samples at k output_dt; the last one exactly at the duration */
+    nout = (long)ceil(ratio - 1e-9);
+    for (i = 1; st == CD_OK && i <= nout; i++) {
+        double tn = i == nout ? sc->duration : (double)i * sc->output_dt;
+        if (tn > sc->duration) tn = sc->duration;
+        st = cd_sim_advance(m, d, tn, step_cb, c, &err);
+        if (st != CD_OK) break;
+        if (w) st = cd_h5_append(w, m, d, &werr);
+        /* a sample with a non-finite value is kept in the file (CD_ENUMERIC) */
+        if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
+        if (st != CD_OK) { err = werr; break; }
+        if (mon) cd_monitor_update(mon, m, d);
+        if (mon && c->until_verdict && mon->verdict != CD_VERDICT_UNRESOLVED) break; /* capdyn sweep --until-verdict */
+        if (w && cli_wall() - last_flush >= sc->flush_every) {
+            st = cd_h5_flush(w, &werr);
+            if (st != CD_OK) { err = werr; break; }
+            last_flush = cli_wall();
+        }
+        if (g_signal) { st = CD_EINTERRUPT; break; }
+    }
+    if (st == CD_EINTERRUPT && c->budget_msg[0]) snprintf(err.msg, sizeof err.msg, "%s", c->budget_msg);
+    if (st != CD_OK && err.msg[0] == 0) snprintf(err.msg, sizeof err.msg, "%s at t = %.9g s", cd_status_string(st), d->t);
+    /* the writer's errors are the only CD_EIO of a run */
+    if (st == CD_EIO) snprintf(wmsg, wlen, "%s", err.msg);
+    clear_progress(c);
+
+    /* keep the last good state of a failed or interrupted run */
+    if (w && st != CD_OK && st != CD_EIO && d->t > t_last_sample) (void)cd_h5_append(w, m, d, &werr);
+    *errp = err;
+    return st;
+}
+
 int cmd_run(int argc, char **argv)
 {
     run_opts o;
@@ -257,8 +315,6 @@ int cmd_run(int argc, char **argv)
     run_ctx ctx;
     char outbuf[1024], msg[768], wmsg[512];
     const char *out;
-    long i, nout;
-    double last_flush, t_last_sample;
     int rc = parse_opts("run", argc, argv, &o, 1), exitc;
     double ratio;
     struct sigaction sa, old_int, old_term, old_xfsz;
@@ -358,44 +414,7 @@ int cmd_run(int argc, char **argv)
             cd_monitor_update(&mon, m, d);
         }
     }
-    /* the state at t = 0 counts for the maxima too (contacts closed at start) */
-    (void)step_cb(m, d, &ctx);
-
-    err.status = werr.status = CD_OK;
-    err.msg[0] = werr.msg[0] = wmsg[0] = 0;
-    st = cd_h5_append(w, m, d, &werr);
-    if (st != CD_OK) err = werr;
-    /* a signal that came while the file was being created */
-    if (st == CD_OK && g_signal) st = CD_EINTERRUPT;
-    t_last_sample = d->t;
-    last_flush = cli_wall();
-    /* samples at k output_dt; the last one exactly at the duration */
-    nout = (long)ceil(ratio - 1e-9);
-    for (i = 1; st == CD_OK && i <= nout; i++) {
-        double tn = i == nout ? sc->duration : (double)i * sc->output_dt;
-        if (tn > sc->duration) tn = sc->duration;
-        st = cd_sim_advance(m, d, tn, step_cb, &ctx, &err);
-        if (st != CD_OK) break;
-        st = cd_h5_append(w, m, d, &werr);
-        /* a sample with a non-finite value is kept in the file (CD_ENUMERIC) */
-        if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
-        if (st != CD_OK) { err = werr; break; }
-        if (have_mon) cd_monitor_update(&mon, m, d);
-        if (cli_wall() - last_flush >= sc->flush_every) {
-            st = cd_h5_flush(w, &werr);
-            if (st != CD_OK) { err = werr; break; }
-            last_flush = cli_wall();
-        }
-        if (g_signal) { st = CD_EINTERRUPT; break; }
-    }
-    if (st == CD_EINTERRUPT && ctx.budget_msg[0]) snprintf(err.msg, sizeof err.msg, "%s", ctx.budget_msg);
-    if (st != CD_OK && err.msg[0] == 0) snprintf(err.msg, sizeof err.msg, "%s at t = %.9g s", cd_status_string(st), d->t);
-    /* the writer's errors are the only CD_EIO of a run */
-    if (st == CD_EIO) snprintf(wmsg, sizeof wmsg, "%s", err.msg);
-    clear_progress(&ctx);
-
-    /* keep the last good state of a failed or interrupted run */
-    if (st != CD_OK && st != CD_EIO && d->t > t_last_sample) (void)cd_h5_append(w, m, d, &werr);
+    st = cli_run_loop(sc, d, w, have_mon ? &mon : NULL, &ctx, &err, wmsg, sizeof wmsg);
     if (st == CD_EINTERRUPT && g_signal)
         snprintf(msg, sizeof msg, "stopped by %s at t = %.9g s", g_signal == SIGINT ? "SIGINT" : "SIGTERM", d->t);
     else if (st == CD_OK)
@@ -404,17 +423,7 @@ int cmd_run(int argc, char **argv)
         snprintf(msg, sizeof msg, "%s", err.msg);
     if (have_mon) { /* the verdict goes into the file (capdyn info, the summary below) */
         cd_h5_capture cap;
-        int fc;
-        cd_error qerr;
-        memset(&cap, 0, sizeof cap);
-        cap.verdict = cd_verdict_name(mon.verdict);
-        cap.t = mon.verdict == CD_VERDICT_CAPTURED ? mon.t_capture : mon.verdict == CD_VERDICT_ESCAPED ? mon.t_escape : NAN;
-        cap.peak_fn = mon.peak_fn;
-        cap.peak_tau = mon.peak_tau;
-        memcpy(cap.offset, mon.offset, sizeof cap.offset);
-        cap.n_stick = mon.n_stick;
-        cap.n_slip = mon.n_slip;
-        if (cd_monitor_quality(&mon, m, d, &cap.epsilon, &fc, &qerr) != CD_OK) cap.epsilon = NAN;
+        cli_capture_of(&mon, m, d, &cap);
         cd_h5_set_capture(w, &cap);
     }
     cst = cd_h5_close(w, m, d, st, msg, &werr);

@@ -1,0 +1,488 @@
+/* capdyn sweep (issue 9, docs/sweep.md): the summary is the same for any
+ * number of worker processes (and, where built, MPI ranks), a failing
+ * variant is recorded while the others complete, an interrupted sweep
+ * resumes to the same summary, a variant's verdict is the one `capdyn run`
+ * gives, and the TAKO-vs-Space region ordering.
+ *
+ * The sweeps here are small and short (a 5x5 grid of 0.08 s runs) so that
+ * `make test` stays quick on a shared machine. */
+#define _POSIX_C_SOURCE 200809L
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include <hdf5.h>
+#include "proc_util.h"
+#include "h5_test_util.h"
+#include <math.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+
+/* ---- comparing two summaries (everything but /timing) -------------------- */
+
+/* The bytes of a dataset or attribute as text: strings one per line,
+ * numbers by their raw bytes in hex. */
+static char *values_of(hid_t obj, int is_attr)
+{
+    hid_t t = is_attr ? H5Aget_type(obj) : H5Dget_type(obj);
+    hid_t s = is_attr ? H5Aget_space(obj) : H5Dget_space(obj);
+    hssize_t n = H5Sget_simple_extent_npoints(s);
+    size_t sz = H5Tget_size(t), len = 0, cap = 64, i;
+    char *out = malloc(cap);
+    cr_assert_not_null(out);
+    out[0] = 0;
+#define APPEND(str)                                                                                                \
+    do {                                                                                                           \
+        const char *a_ = (str);                                                                                    \
+        size_t l_ = strlen(a_);                                                                                    \
+        while (len + l_ + 2 > cap) out = realloc(out, cap *= 2);                                                   \
+        memcpy(out + len, a_, l_ + 1);                                                                             \
+        len += l_;                                                                                                 \
+    } while (0)
+    if (H5Tget_class(t) == H5T_STRING && H5Tis_variable_str(t) > 0) {
+        char **v = calloc((size_t)n + 1, sizeof *v);
+        cr_assert((is_attr ? H5Aread(obj, t, v) : H5Dread(obj, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, v)) >= 0);
+        for (i = 0; i < (size_t)n; i++) {
+            APPEND(v[i] ? v[i] : "(null)");
+            APPEND("\n");
+            H5free_memory(v[i]);
+        }
+        free(v);
+    } else {
+        unsigned char *b = malloc(sz * (size_t)n + 1);
+        char hx[4];
+        cr_assert((is_attr ? H5Aread(obj, t, b) : H5Dread(obj, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, b)) >= 0);
+        for (i = 0; i < sz * (size_t)n; i++) {
+            snprintf(hx, sizeof hx, "%02x", b[i]);
+            APPEND(hx);
+        }
+        free(b);
+    }
+#undef APPEND
+    H5Sclose(s);
+    H5Tclose(t);
+    return out;
+}
+
+typedef struct {
+    hid_t other;
+    const char *path_b;
+    int count;
+} cmp_ctx;
+
+static herr_t cmp_attr(hid_t loc, const char *name, const H5A_info_t *info, void *op)
+{
+    cmp_ctx *c = op;
+    hid_t a = H5Aopen(loc, name, H5P_DEFAULT), b;
+    char *va, *vb;
+    (void)info;
+    cr_assert(H5Aexists(c->other, name) > 0, "attribute %s missing in %s", name, c->path_b);
+    b = H5Aopen(c->other, name, H5P_DEFAULT);
+    va = values_of(a, 1);
+    vb = values_of(b, 1);
+    cr_assert_str_eq(va, vb, "attribute %s differs", name);
+    free(va);
+    free(vb);
+    H5Aclose(a);
+    H5Aclose(b);
+    c->count++;
+    return 0;
+}
+
+static herr_t cmp_obj(hid_t loc, const char *name, const H5L_info_t *info, void *op)
+{
+    cmp_ctx *c = op;
+    H5O_info_t oi;
+    (void)info;
+    if (!strcmp(name, "timing")) return 0; /* wall times: not deterministic */
+    cr_assert(H5Lexists(c->other, name, H5P_DEFAULT) > 0, "%s missing in %s", name, c->path_b);
+    H5Oget_info_by_name(loc, name, &oi, H5P_DEFAULT);
+    if (oi.type == H5O_TYPE_GROUP) {
+        hid_t ga = H5Gopen2(loc, name, H5P_DEFAULT), gb = H5Gopen2(c->other, name, H5P_DEFAULT);
+        cmp_ctx sub = {gb, c->path_b, 0};
+        H5Literate(ga, H5_INDEX_NAME, H5_ITER_INC, NULL, cmp_obj, &sub);
+        c->count += sub.count;
+        H5Gclose(ga);
+        H5Gclose(gb);
+    } else {
+        hid_t da = H5Dopen2(loc, name, H5P_DEFAULT), db = H5Dopen2(c->other, name, H5P_DEFAULT);
+        char *va = values_of(da, 0), *vb = values_of(db, 0);
+        cr_assert_str_eq(va, vb, "dataset %s differs", name);
+        free(va);
+        free(vb);
+        H5Dclose(da);
+        H5Dclose(db);
+        c->count++;
+    }
+    return 0;
+}
+
+/* Every dataset and root attribute of a equals b's, /timing excepted, and
+ * both have the same number of objects. */
+static void same_summary(const char *a, const char *b)
+{
+    hid_t fa = open_ro(a), fb = open_ro(b);
+    cmp_ctx c1, c2;
+    hsize_t na = 0, nb = 0;
+    cr_assert(fa >= 0 && fb >= 0, "open %s and %s", a, b);
+    c1.other = fb;
+    c1.path_b = b;
+    c1.count = 0;
+    H5Literate(fa, H5_INDEX_NAME, H5_ITER_INC, NULL, cmp_obj, &c1);
+    c2 = c1;
+    c2.count = 0;
+    H5Aiterate2(fa, H5_INDEX_NAME, H5_ITER_INC, NULL, cmp_attr, &c2);
+    cr_assert_gt(c1.count, 15, "only %d datasets compared", c1.count);
+    cr_assert_gt(c2.count, 10, "only %d attributes compared", c2.count);
+    {
+        H5G_info_t ga, gb;
+        H5Gget_info(fa, &ga);
+        H5Gget_info(fb, &gb);
+        na = ga.nlinks;
+        nb = gb.nlinks;
+    }
+    cr_assert_eq(na, nb, "%s has %llu objects, %s %llu", a, (unsigned long long)na, b, (unsigned long long)nb);
+    H5Fclose(fa);
+    H5Fclose(fb);
+}
+
+static long long ds_ll(hid_t f, const char *name, long i)
+{
+    long long v[4096];
+    hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+    cr_assert(d >= 0, "dataset %s", name);
+    cr_assert(H5Dread(d, H5T_NATIVE_LLONG, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
+    H5Dclose(d);
+    return v[i];
+}
+static double ds_d(hid_t f, const char *name, long i)
+{
+    double v[4096];
+    hid_t d = H5Dopen2(f, name, H5P_DEFAULT);
+    cr_assert(d >= 0, "dataset %s", name);
+    cr_assert(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
+    H5Dclose(d);
+    return v[i];
+}
+static void ds_str(hid_t f, const char *name, long i, char *out, size_t n)
+{
+    char *v[4096];
+    hid_t d = H5Dopen2(f, name, H5P_DEFAULT), t = H5Tcopy(H5T_C_S1);
+    long k, cnt;
+    H5Tset_size(t, H5T_VARIABLE);
+    H5Tset_cset(t, H5T_CSET_UTF8);
+    cr_assert(d >= 0, "dataset %s", name);
+    {
+        hid_t s = H5Dget_space(d);
+        cnt = (long)H5Sget_simple_extent_npoints(s);
+        H5Sclose(s);
+    }
+    cr_assert(H5Dread(d, t, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
+    snprintf(out, n, "%s", v[i] ? v[i] : "");
+    for (k = 0; k < cnt; k++) H5free_memory(v[k]);
+    H5Tclose(t);
+    H5Dclose(d);
+}
+
+#define SHORT "--set", "simulation.duration=0.08", "--set", "simulation.output_dt=0.01"
+#define GRID5 "--vary", "target.object.position[0]=-0.004:0.004:5", "--vary", "target.object.position[1]=0.07:0.09:5"
+
+/* argv[n..]: BIN sweep SCENARIO SHORT; returns the new n */
+static int sweep_argv(char **argv, int n, const char *b, char *sc)
+{
+    argv[n++] = (char *)b;
+    argv[n++] = "sweep";
+    argv[n++] = sc;
+    argv[n++] = "--set";
+    argv[n++] = "simulation.duration=0.08";
+    argv[n++] = "--set";
+    argv[n++] = "simulation.output_dt=0.01";
+    return n;
+}
+
+/* ---- tests ------------------------------------------------------------------ */
+
+Test(sweep, grid_5x5_same_summary_serial_and_two_workers, .timeout = 240)
+{
+    char dir[256], sc[512], s1[512], s2[512], r[512], *out = NULL, *err = NULL, val[64];
+    hid_t f, g;
+    long i;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s1, sizeof s1, "%s/j1.h5", dir);
+    snprintf(s2, sizeof s2, "%s/j2.h5", dir);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, GRID5, "-j", "1", "-o", s1, NULL), 0, "%s", err);
+    cr_assert(strstr(out, "25 of 25 variants run (0 failed)"), "%s", out);
+    free(out);
+    free(err);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, GRID5, "-j", "2", "-q", "-o", s2, NULL), 0, "%s", err);
+    cr_assert_str_eq(out, "", "--quiet prints nothing: %s", out);
+    free(out);
+    free(err);
+    same_summary(s1, s2);
+    same_summary(s2, s1);
+
+    f = open_ro(s1);
+    cr_assert(f >= 0);
+    cr_assert_eq(attr_ll(f, "n_variants"), 25);
+    cr_assert_eq(attr_ll(f, "complete"), 1);
+    cr_assert_eq(attr_ll(f, "n_failed"), 0);
+    /* C order, the first key slowest: variant 7 = (x index 1, y index 2) */
+    ds_str(f, "param_values", 7 * 2 + 0, val, sizeof val);
+    cr_assert_str_eq(val, "-0.002");
+    ds_str(f, "param_values", 7 * 2 + 1, val, sizeof val);
+    cr_assert_str_eq(val, "0.08");
+    for (i = 0; i < 25; i++) {
+        cr_assert_eq(ds_ll(f, "status", i), 0, "variant %ld", i);
+        cr_assert_eq(ds_d(f, "t_final", i), 0.08, "variant %ld ran to the end", i);
+    }
+    g = H5Gopen2(f, "timing", H5P_DEFAULT);
+    cr_assert(g >= 0);
+    cr_assert_eq(attr_ll(g, "jobs"), 1);
+    H5Gclose(g);
+
+    /* a variant is a normal run: capdyn run with the same overrides gives the
+     * same figures of merit, exactly (variant 12: x = 0, y = 0.08) */
+    snprintf(r, sizeof r, "%s/v12.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, NULL, "run", sc, SHORT, "--set", "target.object.position[0]=0", "--set",
+                        "target.object.position[1]=0.08", "-q", "-o", r, NULL),
+                 0);
+    {
+        hid_t fr = open_ro(r);
+        char v[64];
+        cr_assert(fr >= 0);
+        cr_assert_eq(attr_d(fr, "capture_peak_fn"), ds_d(f, "peak_fn", 12));
+        cr_assert_eq(attr_d(fr, "t_final"), ds_d(f, "t_final", 12));
+        cr_assert_eq(attr_ll(fr, "stats_nrhs"), ds_ll(f, "stats_rhs", 12));
+        attr_s(fr, "capture_verdict", v, sizeof v);
+        cr_assert_eq(ds_ll(f, "verdict", 12), !strcmp(v, "captured") ? 1 : !strcmp(v, "escaped") ? 2 : 0);
+        H5Fclose(fr);
+    }
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(sweep, a_failing_variant_is_recorded_and_the_rest_complete, .timeout = 120)
+{
+    char dir[256], sc[512], s[512], *out = NULL, *err = NULL, why[600];
+    hid_t f;
+    long i;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s, sizeof s, "%s/fail.h5", dir);
+    /* variant 2's work budget is far below what the run needs (the loader
+     * accepts it: at least 960 evaluations); variant 4's mass is refused */
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary",
+                        "simulation.max_rhs_evals=1e9,1e9,3000,1e9,1e9", "-j", "2", "-o", s, NULL),
+                 0, "%s", err);
+    cr_assert(strstr(out, "5 of 5 variants run (1 failed)"), "%s", out);
+    cr_assert(strstr(out, "variant 2 failed: work budget spent:"), "%s", out);
+    free(out);
+    free(err);
+    f = open_ro(s);
+    cr_assert(f >= 0);
+    cr_assert_eq(attr_ll(f, "n_failed"), 1);
+    cr_assert_eq(attr_ll(f, "complete"), 1);
+    for (i = 0; i < 5; i++) {
+        ds_str(f, "failure", i, why, sizeof why);
+        if (i == 2) {
+            cr_assert_eq(ds_ll(f, "status", i), CD_EINTERRUPT);
+            cr_assert(strstr(why, "more than simulation.max_rhs_evals = 3000"), "%s", why);
+            cr_assert_lt(ds_d(f, "t_final", i), 0.08);
+        } else {
+            cr_assert_eq(ds_ll(f, "status", i), 0, "variant %ld: %s", i, why);
+            cr_assert_str_eq(why, "");
+            cr_assert_eq(ds_d(f, "t_final", i), 0.08);
+        }
+    }
+    H5Fclose(f);
+
+    /* a value the loader refuses, in a later variant: recorded with its message */
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary", "target.object.mass=0.3,-1", "-j", "1", "-o",
+                        s, NULL),
+                 0, "%s", err);
+    cr_assert(strstr(out, "variant 1 failed:") && strstr(out, "mass"), "%s", out);
+    free(out);
+    free(err);
+    f = open_ro(s);
+    cr_assert_eq(ds_ll(f, "status", 1), 1000);
+    cr_assert_eq(ds_ll(f, "status", 0), 0);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(sweep, an_interrupted_sweep_resumes_to_the_same_summary, .timeout = 240)
+{
+    char dir[256], sc[512], full[512], part[512], *out = NULL, *err = NULL;
+    char *argv[32];
+    int n = 0, st;
+    pid_t pid;
+    hid_t f;
+    long long nrun;
+    const char *vary = "target.object.position[1]=0.07:0.09:8";
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(full, sizeof full, "%s/full.h5", dir);
+    snprintf(part, sizeof part, "%s/part.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, "--vary", vary, "-j", "2", "-q", "-o", full, NULL), 0,
+                 "%s", err);
+    free(err);
+
+    n = sweep_argv(argv, n, bin(), sc);
+    argv[n++] = "--vary";
+    argv[n++] = (char *)vary;
+    argv[n++] = "-j";
+    argv[n++] = "1";
+    argv[n++] = "-o";
+    argv[n++] = part;
+    argv[n] = NULL;
+    pid = spawn(dir, argv, NULL);
+    /* stop it once the first variants are done (each takes ~0.1 s) */
+    sleep_s(0.5);
+    kill(pid, SIGINT);
+    st = wait_status(pid);
+    f = open_ro(part);
+    cr_assert(f >= 0, "the partial summary is readable");
+    nrun = attr_ll(f, "n_run");
+    if (st == 130) {
+        cr_assert_eq(attr_ll(f, "complete"), 0);
+        cr_assert_lt(nrun, 8);
+        cr_assert_eq(ds_ll(f, "status", 7), -1, "the last variant is marked not run");
+    } else {
+        cr_assert_eq(st, 0, "exit status %d", st);
+        cr_log_warn("the sweep ended before SIGINT (a very fast machine): resume is a no-op");
+    }
+    H5Fclose(f);
+    {
+        char ep[600], *e;
+        snprintf(ep, sizeof ep, "%s/err.txt", dir);
+        e = slurp(ep);
+        if (st == 130) cr_assert(e && strstr(e, "continue with --resume"), "%s", e ? e : "");
+        free(e);
+    }
+
+    /* --resume with another sweep is refused; the same sweep completes */
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, "--vary", "target.object.position[1]=0.07:0.09:7",
+                        "--resume", "-o", part, NULL),
+                 1);
+    cr_assert(strstr(err, "--resume:"), "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary", vary, "-j", "2", "--resume", "-o", part, NULL),
+                 0, "%s", err);
+    cr_assert(strstr(out, "8 of 8 variants run"), "%s", out);
+    free(out);
+    free(err);
+    same_summary(full, part);
+    rm_rf(dir);
+}
+
+Test(sweep, bad_command_lines)
+{
+    char dir[256], sc[512], *err = NULL;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, NULL), 2);
+    cr_assert(strstr(err, "nothing to vary"), "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "simulation.duration=1:2", NULL), 2);
+    cr_assert(strstr(err, "expected A:B:N"), "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "a=1,2", "--vary", "a=3,4", NULL), 2);
+    cr_assert(strstr(err, "given twice"), "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "a=1,,2", NULL), 2);
+    cr_assert(strstr(err, "empty value"), "%s", err);
+    free(err);
+    /* a key the scenario does not have: the loader's message, nothing run */
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "target.object.mas=1,2", NULL), 1);
+    cr_assert(strstr(err, "target") && strstr(err, "(the first variant)"), "%s", err);
+    free(err);
+    rm_rf(dir);
+}
+
+Test(sweep, latin_hypercube_covers_every_stratum_once)
+{
+    char dir[256], sc[512], s[512], *err = NULL;
+    hid_t f;
+    int seen[10] = {0}, i;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s, sizeof s, "%s/lhs.h5", dir);
+    /* the runs are made as short as the loader allows: only the plan matters */
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--set", "simulation.duration=0.002", "--set",
+                        "simulation.output_dt=0.001", "--lhs", "10", "--seed", "7", "--vary",
+                        "target.object.position[1]=0.07:0.09", "--vary", "target.object.mass=0.2:0.4", "-q", "-o", s,
+                        NULL),
+                 0, "%s", err);
+    free(err);
+    f = open_ro(s);
+    cr_assert(f >= 0);
+    for (i = 0; i < 10; i++) {
+        double y, m2;
+        double v[20];
+        hid_t d = H5Dopen2(f, "param_numeric", H5P_DEFAULT);
+        cr_assert(H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0);
+        H5Dclose(d);
+        y = v[2 * i];
+        m2 = v[2 * i + 1];
+        cr_assert(y >= 0.07 && y <= 0.09 && m2 >= 0.2 && m2 <= 0.4, "variant %d: %g %g", i, y, m2);
+        seen[(int)((y - 0.07) / 0.002 * (1 - 1e-12))]++;
+    }
+    for (i = 0; i < 10; i++) cr_assert_eq(seen[i], 1, "stratum %d of y holds %d samples", i, seen[i]);
+    H5Fclose(f);
+    rm_rf(dir);
+}
+
+/* Only where capdyn is built with MPI (make MPI=1 test sets CAPDYN_MPI_BIN):
+ * the same 5x5 grid under `mpirun -n 2` (rank 0 hands out, rank 1 runs)
+ * gives the summary of the serial sweep. */
+Test(sweep, mpirun_two_ranks_gives_the_serial_summary, .timeout = 300)
+{
+    const char *mb = getenv("CAPDYN_MPI_BIN");
+    char dir[256], sc[512], s1[512], sm[512], *err = NULL;
+    /* spawn() splits each "K=V" in place: writable copies */
+    char e1[] = "OMPI_ALLOW_RUN_AS_ROOT=1", e2[] = "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1", e3[] = "OMPI_MCA_btl=self,vader";
+    char *argv[40], *env[4];
+    int n = 0, st;
+    hid_t f, g;
+    env[0] = e1;
+    env[1] = e2;
+    env[2] = e3;
+    env[3] = NULL;
+    if (!mb || !*mb) cr_skip_test("capdyn is not built with MPI here ('make MPI=1 test' runs this test)");
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s1, sizeof s1, "%s/serial.h5", dir);
+    snprintf(sm, sizeof sm, "%s/mpi.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, GRID5, "-j", "1", "-q", "-o", s1, NULL), 0, "%s", err);
+    free(err);
+    argv[n++] = "/usr/bin/env";
+    argv[n++] = "mpirun";
+    argv[n++] = "-n";
+    argv[n++] = "2";
+    argv[n++] = "--oversubscribe";
+    n = sweep_argv(argv, n, mb, sc);
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[0]=-0.004:0.004:5";
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[1]=0.07:0.09:5";
+    argv[n++] = "-q";
+    argv[n++] = "-o";
+    argv[n++] = sm;
+    argv[n] = NULL;
+    st = wait_status(spawn(dir, argv, env));
+    if (st != 0) {
+        char ep[600], *e;
+        snprintf(ep, sizeof ep, "%s/err.txt", dir);
+        e = slurp(ep);
+        cr_assert_fail("mpirun exit status %d: %s", st, e ? e : "");
+    }
+    same_summary(s1, sm);
+    f = open_ro(sm);
+    g = H5Gopen2(f, "timing", H5P_DEFAULT);
+    cr_assert_eq(attr_ll(g, "jobs"), 2, "the summary was written by rank 0 of 2");
+    H5Gclose(g);
+    H5Fclose(f);
+    rm_rf(dir);
+}
