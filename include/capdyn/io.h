@@ -25,6 +25,7 @@ typedef struct {
     double output_dt;      /* sample interval of the results [s] */
     double flush_every;    /* wall-clock seconds between HDF5 flushes */
     int event_capacity;    /* event log ring size for cd_data_create */
+    int interpolate;       /* simulation.sampling: 1 = samples by dense output (cd_sampler), 0 = steps stop at samples */
     /* work budget of a run (docs/scenario-format.md, [simulation]); the loader
      * refuses a scenario whose least work exceeds max_rhs_evals; a runner
      * (the CLI) stops the run when either is spent. 0 = no limit. */

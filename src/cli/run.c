@@ -248,6 +248,81 @@ void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, 
     if (cd_monitor_quality(mon, m, d, &cap->epsilon, &fc, &qerr) != CD_OK) cap->epsilon = NAN;
 }
 
+/* Dense output (simulation.sampling = "interpolate"): one cd_sim_advance over
+ * the whole run; the step callback hands every accepted step to the sampler,
+ * whose samples (k output_dt below the duration) go to the file and the
+ * monitor; the last sample is the run's own state at the duration. */
+typedef struct {
+    run_ctx *c;
+    cd_sampler *smp;
+    cd_h5_writer *w;
+    cd_monitor *mon;
+    const cd_scenario *sc;
+    cd_status wst;        /* the first writer failure */
+    cd_error werr;
+    double t_last_sample, last_flush;
+    int verdict_stop;     /* stopped at the monitor's verdict (--until-verdict) */
+} dense_ctx;
+
+static int dense_sample(const cd_model *m, const cd_data *s, void *user)
+{
+    dense_ctx *x = (dense_ctx *)user;
+    cd_status st = CD_OK;
+    /* the final sample is the run's own state at the duration */
+    if (s->t >= x->sc->duration * (1.0 - 1e-12)) return 0;
+    if (x->w) st = cd_h5_append(x->w, m, s, &x->werr);
+    if (st == CD_OK || st == CD_ENUMERIC) x->t_last_sample = s->t;
+    if (st != CD_OK) { x->wst = st; return 1; }
+    if (x->mon) cd_monitor_update(x->mon, m, s);
+    if (x->mon && x->c->until_verdict && x->mon->verdict != CD_VERDICT_UNRESOLVED) { x->verdict_stop = 1; return 1; }
+    if (x->w && cli_wall() - x->last_flush >= x->sc->flush_every) {
+        st = cd_h5_flush(x->w, &x->werr);
+        if (st != CD_OK) { x->wst = st; return 1; }
+        x->last_flush = cli_wall();
+    }
+    return 0;
+}
+
+static int dense_step_cb(const cd_model *m, cd_data *d, void *user)
+{
+    dense_ctx *x = (dense_ctx *)user;
+    int r = step_cb(m, d, x->c);
+    if (r) return r;
+    r = cd_sampler_update(x->smp, m, d, dense_sample, x);
+    if (r < 0) { /* a sample state that cannot be evaluated */
+        x->wst = CD_ENUMERIC;
+        snprintf(x->werr.msg, sizeof x->werr.msg, "an interpolated sample after t = %.9g s cannot be evaluated", d->t);
+        return 1;
+    }
+    return r;
+}
+
+static cd_status dense_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_monitor *mon, run_ctx *c,
+                            cd_error *err, double *t_last_sample)
+{
+    const cd_model *m = sc->model;
+    dense_ctx x;
+    cd_status st;
+    memset(&x, 0, sizeof x);
+    x.c = c; x.w = w; x.mon = mon; x.sc = sc;
+    x.t_last_sample = *t_last_sample;
+    x.last_flush = cli_wall();
+    x.smp = cd_sampler_create(m, err);
+    if (!x.smp) return err->status;
+    st = cd_sampler_begin(x.smp, m, d, 0.0, sc->output_dt, err); /* k output_dt, as the stopping loop */
+    if (st == CD_OK) st = cd_sim_advance(m, d, sc->duration, dense_step_cb, &x, err);
+    if (x.wst != CD_OK) { st = x.wst; *err = x.werr; }
+    else if (x.verdict_stop && st == CD_EINTERRUPT) st = CD_OK;
+    else if (st == CD_OK) { /* the last sample: the state at the duration */
+        if (w) st = cd_h5_append(w, m, d, err);
+        if (st == CD_OK || st == CD_ENUMERIC) x.t_last_sample = d->t;
+        if (st == CD_OK && mon) cd_monitor_update(mon, m, d);
+    }
+    *t_last_sample = x.t_last_sample;
+    cd_sampler_free(x.smp);
+    return st;
+}
+
 /* The run loop of capdyn run, shared with capdyn sweep (cli.h). */
 cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_monitor *mon, run_ctx *c,
                        cd_error *errp, char *wmsg, size_t wlen)
@@ -271,6 +346,10 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     last_flush = cli_wall();
     /* samples at k output_dt; the last one exactly at the duration */
     nout = (long)ceil(ratio - 1e-9);
+    if (st == CD_OK && sc->interpolate) {
+        st = dense_loop(sc, d, w, mon, c, &err, &t_last_sample);
+        nout = 0;
+    }
     for (i = 1; st == CD_OK && i <= nout; i++) {
         double tn = i == nout ? sc->duration : (double)i * sc->output_dt;
         if (tn > sc->duration) tn = sc->duration;

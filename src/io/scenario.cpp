@@ -2024,6 +2024,7 @@ struct Builder {
         std::string title;
         double duration = 0, output_dt = 0, flush_every = 1.0;
         int event_capacity = 4096;
+        bool interpolate = false;
         int hand = -1, object = -1, feature = -1;
         double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
         double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
@@ -2052,7 +2053,7 @@ struct Builder {
         case CD_STEP_RK4_FIXED: per_step = 4; hname = "h_fixed"; h = o.h_fixed; break;
         default: break;
         }
-        double samples = std::ceil(run.duration / run.output_dt - 1e-9);
+        double samples = run.interpolate ? 1.0 : std::ceil(run.duration / run.output_dt - 1e-9);
         double steps = h > 0 ? std::max(samples, std::ceil(run.duration / h - 1e-9)) : samples;
         run.min_steps = steps;
         run.min_rhs_evals = steps * per_step;
@@ -2089,7 +2090,7 @@ struct Builder {
             Tab t(&sn, "simulation",
                   {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
                    "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
-                   "equilibrium_start", "max_wall_time", "max_rhs_evals"});
+                   "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling"});
             cd_options &o = m->opt;
             run.duration = t.need_num("duration", Range::Pos);
             t.vec("gravity", 3, m->gravity);
@@ -2126,6 +2127,14 @@ struct Builder {
                             fmt_num(run.output_dt));
             }
             run.flush_every = t.num("flush_every", 1.0, Range::Pos);
+            /* samples: "stop" (the integrator ends a step at each) or
+             * "interpolate" (dense output); the stiff stepper interpolates by default */
+            run.interpolate = o.stepper == CD_STEP_ROS34PW2;
+            if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
+            if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
+                Entry *e = t.get("sampling");
+                fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
+            }
             work_budget(t, sn, run);
             if (Entry *e = t.get("event_capacity")) {
                 long long v = int_of(*e->val, t.kp("event_capacity"), 1);
@@ -2384,6 +2393,7 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->output_dt = run.output_dt;
     sc->flush_every = run.flush_every;
     sc->event_capacity = run.event_capacity;
+    sc->interpolate = run.interpolate ? 1 : 0;
     sc->capture_hand = run.hand;
     sc->capture_object = run.object;
     sc->capture_v_max = run.v_max;

@@ -102,6 +102,7 @@ c('max_rhs_evals_negative', BALL.replace('duration = 1.0','duration = 1.0\nmax_r
 c('gripper_type_unknown', BALL + '\n[gripper]\ntype = "claw"\n')
 c('shape_key_for_other_type', BALL + '\n[[system.shape]]\nname = "s"\ntype = "sphere"\nradius = 0.1\nsize = [1, 1, 1]\n')
 c('vector_wrong_length', BALL.replace('mass = 1.0','mass = 1.0\nposition = [0, 0]'))
+c('sampling_interpolate_with_rk4', BALL.replace('duration = 1.0','duration = 1.0\nintegrator = "rk4"\nsampling = "interpolate"'))
 c('target_palm_frame_without_hand', '[simulation]\nduration = 0.1\n\n[[target]]\nname = "object"\nmass = 0.3\n'
   'inertia = [1e-4, 1e-4, 1e-4]\nframe = "palm"\nposition = [0.0, 0.07, 0.0]\nshape = { type = "sphere", radius = 0.03 }\n')
 
