@@ -1060,3 +1060,41 @@ Test(cli, interpolated_samples_match_stopped_ones_on_the_same_grid)
     for (k = 0; k < 2; k++) { free(t[k]); free(p[k]); }
     rm_rf(dir);
 }
+
+Test(cli, uncompressed_results_hold_the_same_samples)
+{
+    /* simulation.compress = false (issue 11: HDF5 compression optional): the
+     * sample series carry no filter, and hold the same values bit for bit as
+     * the default shuffle + deflate file of the same run. */
+    char dir[64], sc[512], h5[2][256], *err = NULL;
+    const char *opt[2] = {"simulation.compress=true", "simulation.compress=false"};
+    double *x[2];
+    size_t n[2];
+    int k, rc, nf[2];
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "free_floating_arm.toml");
+    for (k = 0; k < 2; k++) {
+        hid_t f, ds, pl;
+        snprintf(h5[k], sizeof h5[k], "%s/c%d.h5", dir, k);
+        rc = capdyn(dir, NULL, &err, "run", sc, "-o", h5[k], "--quiet", "--set", "simulation.duration=0.5", "--set", opt[k],
+                    (char *)NULL);
+        cr_assert_eq(rc, 0, "exit %d: %s", rc, err);
+        free(err);
+        f = open_ro(h5[k]);
+        cr_assert(f >= 0);
+        x[k] = read_all(f, "/systems/robot/body_x", &n[k]);
+        ds = H5Dopen2(f, "/systems/robot/body_x", H5P_DEFAULT);
+        pl = H5Dget_create_plist(ds);
+        nf[k] = H5Pget_nfilters(pl);
+        H5Pclose(pl);
+        H5Dclose(ds);
+        H5Fclose(f);
+    }
+    cr_expect_eq(nf[0], 2, "default: shuffle + deflate, got %d filters", nf[0]);
+    cr_expect_eq(nf[1], 0, "compress = false: no filter, got %d", nf[1]);
+    cr_assert_eq(n[0], n[1]);
+    cr_expect_eq(memcmp(x[0], x[1], n[0] * sizeof(double)), 0, "the same samples");
+    free(x[0]);
+    free(x[1]);
+    rm_rf(dir);
+}

@@ -182,6 +182,8 @@ typedef struct cd_data {
     double *slot_vt;      /* (nslot x 3) tangential relative velocity at the contact point [m/s] */
     double *slot_va;      /* (nslot x 3) slip (anchor) velocity while slipping [m/s] */
     double *slot_fnraw;   /* (nslot) the normal law before the no-pull rule [N] */
+    double *shape_R;      /* (nshape x 9) shape -> world rotation at the last evaluation (once per shape) */
+    double *shape_xw;     /* (nshape x 3) shape origin, world [m] */
     int *slot_geomfail;   /* (nslot) 1 if the last geometry query was rejected */
     int *slot_held;       /* (nslot) 1 while the chattering guard suspends the slot's switches
                              (= sw_held): its forces are then clipped to f_n >= 0 and |f_t| <= mu_max f_n */

@@ -26,6 +26,7 @@ typedef struct {
     double flush_every;    /* wall-clock seconds between HDF5 flushes */
     int event_capacity;    /* event log ring size for cd_data_create */
     int interpolate;       /* simulation.sampling: 1 = samples by dense output (cd_sampler), 0 = steps stop at samples */
+    int no_compress;       /* simulation.compress = false: sample series stored without shuffle + deflate */
     /* work budget of a run (docs/scenario-format.md, [simulation]); the loader
      * refuses a scenario whose least work exceeds max_rhs_evals; a runner
      * (the CLI) stops the run when either is spent. 0 = no limit. */

@@ -34,23 +34,26 @@ static double sgnpow(double x, double p)
     return x >= 0 ? pow(x, p) : -pow(-x, p);
 }
 
-/* world pose of a shape */
-static void shape_pose(const cd_model *m, const cd_data *d, int sh, double R[9], double x[3])
+/* world pose of every shape, once per evaluation (d->shape_R, shape_xw) */
+static void shape_poses(const cd_model *m, cd_data *d)
 {
-    int b = m->shape_body[sh];
-    double t[3];
-    cd_m3_mul(R, d->body_R + 9 * b, m->shape_rot + 9 * sh);
-    cd_m3_mulv(t, d->body_R + 9 * b, m->shape_pos + 3 * sh);
-    cd_v3_add(x, d->body_x + 3 * b, t);
+    int sh;
+    for (sh = 0; sh < m->nshape; sh++) {
+        int b = m->shape_body[sh];
+        double t[3];
+        cd_m3_mul(d->shape_R + 9 * sh, d->body_R + 9 * b, m->shape_rot + 9 * sh);
+        cd_m3_mulv(t, d->body_R + 9 * b, m->shape_pos + 3 * sh);
+        cd_v3_add(d->shape_xw + 3 * sh, d->body_x + 3 * b, t);
+    }
 }
 
 /* query in world coordinates (n, s in world); returns 0, or -1 for a rejected (non-finite) answer */
 static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r,
                        double *dist, double n[3], double s[3])
 {
-    double R[9], x[3], pl[3], t[3], nl[3], sl[3];
+    const double *R = d->shape_R + 9 * sh, *x = d->shape_xw + 3 * sh;
+    double pl[3], t[3], nl[3], sl[3];
     int res;
-    shape_pose(m, d, sh, R, x);
     cd_v3_sub(t, pw, x);
     cd_m3_tmulv(pl, R, t);
     res = cd_shape_distance(m, sh, pl, r, dist, nl, sl);
@@ -73,11 +76,9 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
 static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r, double *dist,
                     double n[3], double s[3])
 {
-    int b = m->shape_body[sh];
-    double xs[3], t[3], dd, rb = m->shape_rbound[sh];
+    const double *xs = d->shape_xw + 3 * sh;
+    double t[3], dd, rb = m->shape_rbound[sh];
     if (!(rb < HUGE_VAL)) return 0;
-    cd_m3_mulv(t, d->body_R + 9 * b, m->shape_pos + 3 * sh);
-    cd_v3_add(xs, d->body_x + 3 * b, t);
     cd_v3_sub(t, pw, xs);
     dd = cd_v3_norm(t);
     if (!(dd - rb > r + CD_BROAD_MARGIN)) return 0;
@@ -128,6 +129,7 @@ static void vpow(double r[3], const double a[3], double K, double p)
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
     int k;
+    shape_poses(m, d);
     for (k = 0; k < m->nslot; k++) {
         int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
         int ba = m->cp_body[cp], bb = m->shape_body[sh], res;

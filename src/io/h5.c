@@ -158,6 +158,7 @@ struct cd_h5_writer {
     int space_check;              /* check free space before each commit (default 1) */
     double reserve;               /* bytes the check keeps free beyond its estimate */
     long long expect_rows;        /* samples the run expects (duration / output_dt + 2), 0 if unknown */
+    int compress;                 /* deflate the sample series (simulation.compress, default 1) */
 };
 
 /* ---- error plumbing --------------------------------------------------------- */
@@ -552,8 +553,10 @@ static int add_series(cd_h5_writer *w, hid_t loc, const char *name, int type, in
     dcpl = H5Pcreate(H5P_DATASET_CREATE);
     if (sp < 0 || dcpl < 0) goto fail;
     if (H5Pset_chunk(dcpl, rank, chunk) < 0) goto fail;
-    if (type != T_I8) H5Pset_shuffle(dcpl);
-    if (H5Pset_deflate(dcpl, 1) < 0) goto fail;
+    if (w->compress) {
+        if (type != T_I8) H5Pset_shuffle(dcpl);
+        if (H5Pset_deflate(dcpl, 1) < 0) goto fail;
+    }
     s->dset = H5Dcreate2(loc, name, file_type(type), sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
     if (s->dset < 0) goto fail;
     if (units) attr_str(s->dset, "units", units);
@@ -1249,6 +1252,7 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
     w->space_check = 1;
     w->path = malloc(strlen(path) + 1);
     if (w->path) strcpy(w->path, path);
+    w->compress = sc ? !sc->no_compress : 1;
     if (sc && sc->output_dt > 0 && sc->duration > 0 && sc->duration / sc->output_dt < 1e12)
         w->expect_rows = (long long)(sc->duration / sc->output_dt) + 2;
     w->nsys = m->nsys;

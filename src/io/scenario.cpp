@@ -2024,7 +2024,7 @@ struct Builder {
         std::string title;
         double duration = 0, output_dt = 0, flush_every = 1.0;
         int event_capacity = 4096;
-        bool interpolate = false;
+        bool interpolate = false, no_compress = false;
         int hand = -1, object = -1, feature = -1;
         double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
         double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
@@ -2090,7 +2090,7 @@ struct Builder {
             Tab t(&sn, "simulation",
                   {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
                    "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
-                   "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling"});
+                   "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
             cd_options &o = m->opt;
             run.duration = t.need_num("duration", Range::Pos);
             t.vec("gravity", 3, m->gravity);
@@ -2135,6 +2135,7 @@ struct Builder {
                 Entry *e = t.get("sampling");
                 fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
             }
+            if (Entry *e = t.get("compress")) run.no_compress = !bool_of(*e->val, t.kp("compress"));
             work_budget(t, sn, run);
             if (Entry *e = t.get("event_capacity")) {
                 long long v = int_of(*e->val, t.kp("event_capacity"), 1);
@@ -2394,6 +2395,7 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->flush_every = run.flush_every;
     sc->event_capacity = run.event_capacity;
     sc->interpolate = run.interpolate ? 1 : 0;
+    sc->no_compress = run.no_compress ? 1 : 0;
     sc->capture_hand = run.hand;
     sc->capture_object = run.object;
     sc->capture_v_max = run.v_max;
