@@ -253,6 +253,8 @@ int cmd_run(int argc, char **argv)
     cd_error err, werr;
     cd_status st = CD_OK, cst;
     cd_monitor mon;
+    cd_ctrl *ctl = NULL;
+    cd_ctrl_merit merit;
     int have_mon = 0;
     run_ctx ctx;
     char outbuf[1024], msg[768], wmsg[512];
@@ -300,6 +302,15 @@ int cmd_run(int argc, char **argv)
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
+    /* the scenario's built-in controller ([control], docs/capture.md) */
+    if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
+        cli_error("%s: %s", o.scenario, err.msg);
+        cd_data_free(d);
+        cd_ctrl_free(ctl);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    if (ctl) cd_ctrl_install(ctl, d);
     /* Signals are caught before the results file exists, so that a SIGINT
      * while it is being created still ends with a closed file. SIGXFSZ
      * (file size limit, ulimit -f) would kill the process in the middle of
@@ -324,6 +335,7 @@ int cmd_run(int argc, char **argv)
         cli_error("%s", err.msg);
         restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
         cd_data_free(d);
+        cd_ctrl_free(ctl);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
@@ -344,6 +356,7 @@ int cmd_run(int argc, char **argv)
         free(ctx.fn_max);
         free(ctx.ft_max);
         cd_data_free(d);
+        cd_ctrl_free(ctl);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
@@ -358,6 +371,7 @@ int cmd_run(int argc, char **argv)
             cd_monitor_update(&mon, m, d);
         }
     }
+    if (ctl) cd_ctrl_merit_init(&merit, ctl, m, d); /* docs/capture.md */
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, &ctx);
 
@@ -381,6 +395,7 @@ int cmd_run(int argc, char **argv)
         if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
         if (st != CD_OK) { err = werr; break; }
         if (have_mon) cd_monitor_update(&mon, m, d);
+        if (ctl) cd_ctrl_merit_update(&merit, ctl, m, d);
         if (cli_wall() - last_flush >= sc->flush_every) {
             st = cd_h5_flush(w, &werr);
             if (st != CD_OK) { err = werr; break; }
@@ -415,6 +430,16 @@ int cmd_run(int argc, char **argv)
         cap.n_stick = mon.n_stick;
         cap.n_slip = mon.n_slip;
         if (cd_monitor_quality(&mon, m, d, &cap.epsilon, &fc, &qerr) != CD_OK) cap.epsilon = NAN;
+        if (ctl) { /* the controller's figures of merit (docs/capture.md) */
+            memcpy(cap.dP, merit.dP, sizeof cap.dP);
+            memcpy(cap.dL, merit.dL, sizeof cap.dL);
+            cap.base_angle_max = merit.base_angle_max;
+            cap.base_rate_end = merit.base_rate;
+            cap.t_trigger = cd_ctrl_t_trigger(ctl);
+            cap.t_rigidise = mon.verdict == CD_VERDICT_CAPTURED ? mon.t_capture - cap.t_trigger : NAN;
+            cap.v_rel_end = merit.v_rel;
+            cap.w_rel_end = merit.w_rel;
+        }
         cd_h5_set_capture(w, &cap);
     }
     cst = cd_h5_close(w, m, d, st, msg, &werr);
@@ -457,6 +482,7 @@ int cmd_run(int argc, char **argv)
     free(ctx.fn_max);
     free(ctx.ft_max);
     cd_data_free(d);
+    cd_ctrl_free(ctl);
     cd_scenario_free(sc);
     return exitc;
 }
