@@ -424,14 +424,25 @@ static void cd_m3_from_rpy_deg(double R[9], double r, double p, double y)
     R[6] = -sp;     R[7] = cp * sr;                R[8] = cp * cr;
 }
 
-static void object_in_palm(const cd_model *m, const cd_data *d, int hand, int obj, double x[3], double v[3], double w[3],
+static void object_in_palm(const cd_scenario *sc, const cd_data *d, double x[3], double v[3], double w[3],
                            double Rrel[9])
 {
-    int pb = m->sys_body_adr[hand], ob = m->sys_body_adr[obj], k, i;
-    const double *R = d->body_R + 9 * pb;
-    double dx[3], dv[3], dw[3];
+    /* the palm frame: capture_palm_pos / capture_palm_rot on the palm body (a
+     * fixed hand's base: at rest, so the frame's velocity is 0) */
+    const cd_model *m = sc->model;
+    int pb = sc->capture_palm >= 0 ? sc->capture_palm : m->sys_body_adr[sc->capture_hand];
+    int ob = m->sys_body_adr[sc->capture_object], k, i, j;
+    const double *Rb = d->body_R + 9 * pb;
+    double R[9], xp[3], dx[3], dv[3], dw[3];
+    for (i = 0; i < 3; i++)
+        for (j = 0; j < 3; j++)
+            R[3 * i + j] = Rb[3 * i] * sc->capture_palm_rot[j] + Rb[3 * i + 1] * sc->capture_palm_rot[3 + j] +
+                           Rb[3 * i + 2] * sc->capture_palm_rot[6 + j];
+    for (k = 0; k < 3; k++)
+        xp[k] = d->body_x[3 * pb + k] + Rb[3 * k] * sc->capture_palm_pos[0] + Rb[3 * k + 1] * sc->capture_palm_pos[1] +
+                Rb[3 * k + 2] * sc->capture_palm_pos[2];
     for (k = 0; k < 3; k++) {
-        dx[k] = d->body_x[3 * ob + k] - d->body_x[3 * pb + k];
+        dx[k] = d->body_x[3 * ob + k] - xp[k];
         dv[k] = d->body_v[3 * ob + k] - d->body_v[3 * pb + k];
         dw[k] = d->body_w[3 * ob + k] - d->body_w[3 * pb + k];
     }
@@ -471,7 +482,7 @@ Test(gripper, a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is)
         cd_kinematics(sc->model, d);
         if (c) { /* the initial relative state is the one given */
             double x0[3], v0[3], w0[3], R0[9];
-            object_in_palm(sc->model, d, sc->capture_hand, sc->capture_object, x0, v0, w0, R0);
+            object_in_palm(sc, d, x0, v0, w0, R0);
             cr_expect_lt(fabs(x0[0] - 0.005) + fabs(x0[1] - 0.075) + fabs(x0[2]), 1e-14, "initial relative position");
             {
                 double Rg[9];
@@ -486,7 +497,7 @@ Test(gripper, a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is)
             cr_assert_eq(cd_sim_advance(sc->model, d, i * 1e-3, NULL, NULL, &e), CD_OK, "%s", e.msg);
             cd_monitor_update(&mo, sc->model, d);
         }
-        object_in_palm(sc->model, d, sc->capture_hand, sc->capture_object, x[c], v[c], w[c], R[c]);
+        object_in_palm(sc, d, x[c], v[c], w[c], R[c]);
         verdict[c] = mo.verdict;
         cr_log_info("case %d: %s, object in palm [%.9f %.9f %.9f], %ld events", c, cd_verdict_name(mo.verdict), x[c][0],
                     x[c][1], x[c][2], d->ev_count);

@@ -216,7 +216,7 @@ Test(loader_limits, nesting_deeper_than_64_is_refused_before_the_parser)
         fclose(f);
         expect_msg(dir, "deep_ok.toml", NULL, 0, CD_EINVAL,
                    "deep_ok.toml:1:1: key 'x': unknown key (expected one of: 'title', 'include', 'simulation', "
-                   "'contact', 'system', 'target', 'pair', 'gripper', 'actuator', 'capture')");
+                   "'contact', 'system', 'target', 'pair', 'gripper', 'actuator', 'capture', 'control')");
     }
     lu_rm_rf(dir);
 }

@@ -8,4 +8,5 @@
 #include "capdyn/data.h"
 #include "capdyn/sim.h"
 #include "capdyn/dynamics.h"
+#include "capdyn/control.h"
 #endif

@@ -7,6 +7,7 @@
 #include "capdyn/model.h"
 #include "capdyn/sim.h"
 #include "capdyn/verdict.h"
+#include "capdyn/control.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -38,6 +39,9 @@ typedef struct {
     int capture_object;    /* the object it is to capture ([capture] object, or the first [[target]]), -1 */
     double capture_v_max, capture_w_max, capture_dwell, capture_workspace; /* [capture] (verdict.h) */
     int capture_feature;   /* [capture] feature: the shape tested for enclosure, -1 = the object's CoM */
+    int capture_palm;      /* the palm body ([gripper] mounted with system/attach: that link), -1 = the hand's base */
+    double capture_palm_pos[3], capture_palm_rot[9]; /* the palm frame on it ([gripper] palm.position, rpy_deg) */
+    cd_ctrl_config *control; /* [control]: the built-in capture controller (cd_ctrl_create), NULL if none; owned */
 } cd_scenario;
 
 /* Loads, validates and builds a scenario. overrides are "key.path=value"
@@ -87,6 +91,14 @@ typedef struct {
     double offset[3];     /* [m] object - palm centre at the end, palm frame */
     double epsilon;       /* Ferrari-Canny epsilon of the final contacts (0: no force closure) */
     int n_stick, n_slip;  /* contacts at the end */
+    /* a [control] run's figures of merit (control.h, cd_ctrl_merit; docs/capture.md),
+     * written as capture_dP ... capture_w_rel_end when the scenario has a [control] */
+    double dP[3], dL[3];  /* momentum transferred to the chaser [kg m/s], [kg m^2/s] (about the origin) */
+    double base_angle_max;/* [rad] */
+    double base_rate_end; /* [rad/s] */
+    double t_trigger;     /* [s] grasp trigger, NaN if none */
+    double t_rigidise;    /* [s] trigger to the captured verdict, NaN if not captured */
+    double v_rel_end, w_rel_end; /* target relative to the chaser base at the end [m/s], [rad/s] */
 } cd_h5_capture;
 void cd_h5_set_capture(cd_h5_writer *w, const cd_h5_capture *c);
 /* Writes the final statistics and run status, flushes and closes; frees w.

@@ -39,6 +39,10 @@ typedef struct {
                              + the longest finger's reach), computed at init */
     int feature;          /* shape of the object that is to be grasped (a handrail's bar): its
                              centre is the point tested for enclosure; -1 = the object's CoM */
+    int palm;             /* palm body: the fingers are its child links; -1 = the hand's base
+                             (a gripper mounted on an arm: the link it is mounted on) */
+    double palm_pos[3];   /* palm frame origin on the palm body, body frame [m], default 0 */
+    double palm_rot[9];   /* palm frame -> palm body frame, default identity */
 } cd_monitor_opts;
 
 /* Defaults above, hand and object -1 (must be set). */
@@ -52,7 +56,7 @@ typedef struct {
     double peak_fn;       /* [N] largest normal force on the object, any slot, any sample */
     double peak_tau;      /* [N m] largest |joint torque| (actuator + passive) of the hand */
     int n_stick, n_slip;  /* object contacts at the end */
-    double offset[3];     /* [m] object CoM - palm centre at the end, palm frame */
+    double offset[3];     /* [m] object CoM - palm centre (the palm frame's origin) at the end, palm frame */
     double offset_norm;
     double point[3];      /* the point tested for enclosure (feature centre or CoM), palm frame, at the end [m] */
     int enclosed;         /* at the last sample */

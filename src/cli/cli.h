@@ -4,6 +4,7 @@
 
 #include <stdio.h>
 #include "capdyn/io.h"
+#include "capdyn/control.h"
 #include "../io/h5_read.h"
 
 /* exit codes (docs/cli.md) */
@@ -40,6 +41,8 @@ typedef struct {
     double max_wall, max_rhs;
     char budget_msg[256];
     int until_verdict;     /* end the run at the monitor's verdict (capdyn sweep --until-verdict) */
+    const cd_ctrl *ctl;    /* the scenario's built-in controller ([control]), or NULL */
+    cd_ctrl_merit *merit;  /* its figures of merit, updated at every sample (with ctl) */
 } run_ctx;
 
 /* The run loop of capdyn run, shared with capdyn sweep: the state at t = 0
@@ -57,7 +60,8 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
                        cd_error *err, char *wmsg, size_t wlen);
 /* The verdict and figures of merit of a monitor at the end of a run
  * (verdict name static; epsilon NaN if the grasp analysis fails). */
-void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, cd_h5_capture *cap);
+void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_merit *merit, const cd_model *m,
+                    const cd_data *d, cd_h5_capture *cap);
 
 int cmd_sweep(int argc, char **argv);
 

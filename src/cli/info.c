@@ -208,6 +208,24 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
                          "%lld slip), object offset from the palm (%.4g, %.4g, %.4g) m, grasp quality epsilon %.4g%s",
                          pfn, ptau, nst + nsl, nst, nsl, off[0], off[1], off[2], eps, eps > 0 ? "" : " (no force closure)");
                 print_wrapped_kv(out, "", line);
+                { /* a [control] run's figures of merit (docs/capture.md) */
+                    double dP[3], dL[3], amax = NAN, rate = NAN, ttr = NAN, trig = NAN, vr = NAN, wr = NAN;
+                    if (cd_h5r_attr_f64v(r, "/", "capture_dP", dP, 3) == 0 && cd_h5r_attr_f64v(r, "/", "capture_dL", dL, 3) == 0) {
+                        cd_h5r_attr_f64(r, "/", "capture_base_angle_max", &amax);
+                        cd_h5r_attr_f64(r, "/", "capture_base_rate_end", &rate);
+                        cd_h5r_attr_f64(r, "/", "capture_t_trigger", &trig);
+                        cd_h5r_attr_f64(r, "/", "capture_t_rigidise", &ttr);
+                        cd_h5r_attr_f64(r, "/", "capture_v_rel_end", &vr);
+                        cd_h5r_attr_f64(r, "/", "capture_w_rel_end", &wr);
+                        snprintf(line, sizeof line,
+                                 "momentum to the chaser (%.4g, %.4g, %.4g) kg m/s, (%.4g, %.4g, %.4g) kg m^2/s; base "
+                                 "attitude max %.4g deg, final rate %.4g deg/s; trigger at %.6g s, rigidised %.6g s later; "
+                                 "target relative to the base at the end %.4g m/s, %.4g deg/s",
+                                 dP[0], dP[1], dP[2], dL[0], dL[1], dL[2], amax * 57.29577951308232, rate * 57.29577951308232, trig, ttr,
+                                 vr, wr * 57.29577951308232);
+                        print_wrapped_kv(out, "", line);
+                    }
+                }
             } else {
                 print_wrapped_kv(out, "capture", "no verdict (the run did not finish)");
             }

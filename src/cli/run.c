@@ -233,7 +233,8 @@ int cmd_check(int argc, char **argv)
 }
 
 /* The verdict and figures of merit of a monitor at the end of a run (cli.h). */
-void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, cd_h5_capture *cap)
+void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_merit *merit, const cd_model *m,
+                    const cd_data *d, cd_h5_capture *cap)
 {
     int fc;
     cd_error qerr;
@@ -246,6 +247,16 @@ void cli_capture_of(const cd_monitor *mon, const cd_model *m, const cd_data *d, 
     cap->n_stick = mon->n_stick;
     cap->n_slip = mon->n_slip;
     if (cd_monitor_quality(mon, m, d, &cap->epsilon, &fc, &qerr) != CD_OK) cap->epsilon = NAN;
+    if (ctl && merit) { /* the controller's figures of merit (docs/capture.md) */
+        memcpy(cap->dP, merit->dP, sizeof cap->dP);
+        memcpy(cap->dL, merit->dL, sizeof cap->dL);
+        cap->base_angle_max = merit->base_angle_max;
+        cap->base_rate_end = merit->base_rate;
+        cap->t_trigger = cd_ctrl_t_trigger(ctl);
+        cap->t_rigidise = mon->verdict == CD_VERDICT_CAPTURED ? mon->t_capture - cap->t_trigger : NAN;
+        cap->v_rel_end = merit->v_rel;
+        cap->w_rel_end = merit->w_rel;
+    }
 }
 
 /* Dense output (simulation.sampling = "interpolate"): one cd_sim_advance over
@@ -274,6 +285,7 @@ static int dense_sample(const cd_model *m, const cd_data *s, void *user)
     if (st == CD_OK || st == CD_ENUMERIC) x->t_last_sample = s->t;
     if (st != CD_OK) { x->wst = st; return 1; }
     if (x->mon) cd_monitor_update(x->mon, m, s);
+    if (x->c->ctl && x->c->merit) cd_ctrl_merit_update(x->c->merit, x->c->ctl, m, s);
     if (x->mon && x->c->until_verdict && x->mon->verdict != CD_VERDICT_UNRESOLVED) { x->verdict_stop = 1; return 1; }
     if (x->w && cli_wall() - x->last_flush >= x->sc->flush_every) {
         st = cd_h5_flush(x->w, &x->werr);
@@ -317,6 +329,7 @@ static cd_status dense_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, 
         if (w) st = cd_h5_append(w, m, d, err);
         if (st == CD_OK || st == CD_ENUMERIC) x.t_last_sample = d->t;
         if (st == CD_OK && mon) cd_monitor_update(mon, m, d);
+        if (st == CD_OK && c->ctl && c->merit) cd_ctrl_merit_update(c->merit, c->ctl, m, d);
     }
     *t_last_sample = x.t_last_sample;
     cd_sampler_free(x.smp);
@@ -334,6 +347,7 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     double last_flush, t_last_sample, ratio = sc->duration / sc->output_dt;
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, c);
+    if (c->ctl && c->merit) cd_ctrl_merit_init(c->merit, c->ctl, m, d); /* docs/capture.md */
 
     err.status = werr.status = CD_OK;
     err.msg[0] = werr.msg[0] = 0;
@@ -360,6 +374,7 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
         if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
         if (st != CD_OK) { err = werr; break; }
         if (mon) cd_monitor_update(mon, m, d);
+        if (c->ctl && c->merit) cd_ctrl_merit_update(c->merit, c->ctl, m, d);
         if (mon && c->until_verdict && mon->verdict != CD_VERDICT_UNRESOLVED) break; /* capdyn sweep --until-verdict */
         if (w && cli_wall() - last_flush >= sc->flush_every) {
             st = cd_h5_flush(w, &werr);
@@ -390,6 +405,8 @@ int cmd_run(int argc, char **argv)
     cd_error err, werr;
     cd_status st = CD_OK, cst;
     cd_monitor mon;
+    cd_ctrl *ctl = NULL;
+    cd_ctrl_merit merit;
     int have_mon = 0;
     run_ctx ctx;
     char outbuf[1024], msg[768], wmsg[512];
@@ -435,6 +452,15 @@ int cmd_run(int argc, char **argv)
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
+    /* the scenario's built-in controller ([control], docs/capture.md) */
+    if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
+        cli_error("%s: %s", o.scenario, err.msg);
+        cd_data_free(d);
+        cd_ctrl_free(ctl);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    if (ctl) cd_ctrl_install(ctl, d);
     /* Signals are caught before the results file exists, so that a SIGINT
      * while it is being created still ends with a closed file. SIGXFSZ
      * (file size limit, ulimit -f) would kill the process in the middle of
@@ -459,6 +485,7 @@ int cmd_run(int argc, char **argv)
         cli_error("%s", err.msg);
         restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
         cd_data_free(d);
+        cd_ctrl_free(ctl);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
@@ -479,6 +506,7 @@ int cmd_run(int argc, char **argv)
         free(ctx.fn_max);
         free(ctx.ft_max);
         cd_data_free(d);
+        cd_ctrl_free(ctl);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
@@ -493,6 +521,8 @@ int cmd_run(int argc, char **argv)
             cd_monitor_update(&mon, m, d);
         }
     }
+    ctx.ctl = ctl;
+    ctx.merit = ctl ? &merit : NULL;
     st = cli_run_loop(sc, d, w, have_mon ? &mon : NULL, &ctx, &err, wmsg, sizeof wmsg);
     if (st == CD_EINTERRUPT && g_signal)
         snprintf(msg, sizeof msg, "stopped by %s at t = %.9g s", g_signal == SIGINT ? "SIGINT" : "SIGTERM", d->t);
@@ -502,7 +532,7 @@ int cmd_run(int argc, char **argv)
         snprintf(msg, sizeof msg, "%s", err.msg);
     if (have_mon) { /* the verdict goes into the file (capdyn info, the summary below) */
         cd_h5_capture cap;
-        cli_capture_of(&mon, m, d, &cap);
+        cli_capture_of(&mon, ctl, ctl ? &merit : NULL, m, d, &cap);
         cd_h5_set_capture(w, &cap);
     }
     cst = cd_h5_close(w, m, d, st, msg, &werr);
@@ -545,6 +575,7 @@ int cmd_run(int argc, char **argv)
     free(ctx.fn_max);
     free(ctx.ft_max);
     cd_data_free(d);
+    cd_ctrl_free(ctl);
     cd_scenario_free(sc);
     return exitc;
 }

@@ -394,6 +394,8 @@ static void run_variant(const sw_ctx *cx, long idx, sw_result *r)
     cd_error err;
     run_ctx ctx;
     cd_status st;
+    cd_ctrl *ctl = NULL;
+    cd_ctrl_merit merit;
     char wmsg[512], path[4096];
     double t0 = cli_wall();
     sw_result_blank(r, idx);
@@ -433,6 +435,16 @@ static void run_variant(const sw_ctx *cx, long idx, sw_result *r)
         snprintf(r->reason, sizeof r->reason, "%s", err.msg);
         goto out;
     }
+    /* the scenario's built-in controller ([control], docs/capture.md), as capdyn run */
+    if (sc->control) {
+        ctl = cd_ctrl_create(sc->model, sc->control, &err);
+        if (!ctl) {
+            r->status = SW_ELOAD;
+            snprintf(r->reason, sizeof r->reason, "%s", err.msg);
+            goto out;
+        }
+        cd_ctrl_install(ctl, d);
+    }
     if (cx->o->keep_dir) {
         snprintf(path, sizeof path, "%s/variant_%06ld.h5", cx->o->keep_dir, idx);
         w = cd_h5_create(path, sc->model, sc, &err);
@@ -450,6 +462,8 @@ static void run_variant(const sw_ctx *cx, long idx, sw_result *r)
     ctx.max_wall = sc->max_wall_time;
     ctx.max_rhs = sc->max_rhs_evals;
     ctx.until_verdict = cx->o->until_verdict;
+    ctx.ctl = ctl;
+    ctx.merit = ctl ? &merit : NULL;
     if (!ctx.fn_max || !ctx.ft_max) {
         r->status = CD_ENOMEM;
         snprintf(r->reason, sizeof r->reason, "out of memory");
@@ -477,7 +491,7 @@ static void run_variant(const sw_ctx *cx, long idx, sw_result *r)
         if (ctx.fn_max[k] > r->fn_step_max) r->fn_step_max = ctx.fn_max[k];
     if (have_mon) {
         cd_h5_capture cap;
-        cli_capture_of(&mon, sc->model, d, &cap);
+        cli_capture_of(&mon, ctl, ctl ? &merit : NULL, sc->model, d, &cap);
         r->verdict = (int)mon.verdict;
         r->t_capture = mon.t_capture;
         r->t_escape = mon.t_escape;
@@ -505,6 +519,7 @@ out:
     free(ctx.fn_max);
     free(ctx.ft_max);
     cd_data_free(d);
+    cd_ctrl_free(ctl);
     cd_scenario_free(sc);
     if (own)
         for (k = 0; k < p->nkey; k++) free(own[k]);

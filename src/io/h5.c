@@ -127,6 +127,7 @@ typedef struct {
 struct cd_h5_writer {
     hid_t file;
     int has_capture, capture_set;  /* the layout has the capture_* attributes; a verdict was given */
+    int has_control;               /* ... and the [control] figures of merit (docs/capture.md) */
     cd_h5_capture capture;
     char capture_verdict[16];
     int nsys, nbody, nslot, ny;   /* of the model the file was created for */
@@ -999,10 +1000,20 @@ static void utc_now(char *out, size_t len)
  * the top of this file). Readers trust them once run_status is not
  * "running". */
 /* The capture verdict (cd_h5_set_capture), placeholders when c == NULL. */
-static int write_capture_attrs(hid_t f, const cd_h5_capture *c)
+static int write_capture_attrs(hid_t f, const cd_h5_capture *c, int control)
 {
     double nan3[3] = {NAN, NAN, NAN};
     int rc = 0;
+    if (control) { /* a [control] run's figures of merit (docs/capture.md) */
+        rc |= attr_f64v(f, "capture_dP", 3, c ? c->dP : nan3);
+        rc |= attr_f64v(f, "capture_dL", 3, c ? c->dL : nan3);
+        rc |= attr_f64(f, "capture_base_angle_max", c ? c->base_angle_max : NAN);
+        rc |= attr_f64(f, "capture_base_rate_end", c ? c->base_rate_end : NAN);
+        rc |= attr_f64(f, "capture_t_trigger", c ? c->t_trigger : NAN);
+        rc |= attr_f64(f, "capture_t_rigidise", c ? c->t_rigidise : NAN);
+        rc |= attr_f64(f, "capture_v_rel_end", c ? c->v_rel_end : NAN);
+        rc |= attr_f64(f, "capture_w_rel_end", c ? c->w_rel_end : NAN);
+    }
     rc |= attr_str_fixed(f, "capture_verdict", c ? c->verdict : "", 16);
     rc |= attr_f64(f, "capture_t", c ? c->t : NAN);
     rc |= attr_f64(f, "capture_peak_fn", c ? c->peak_fn : NAN);
@@ -1084,7 +1095,8 @@ static int write_root_attrs(cd_h5_writer *w, const cd_model *m, const cd_scenari
     rc |= write_closing_attrs(f, NULL);
     if (sc && sc->capture_hand >= 0 && sc->capture_object >= 0) {
         w->has_capture = 1;
-        rc |= write_capture_attrs(f, NULL);
+        w->has_control = sc->control != NULL;
+        rc |= write_capture_attrs(f, NULL, w->has_control);
     }
     return rc ? -1 : 0;
 }
@@ -1515,7 +1527,7 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
      * place) if there is still room for them */
     if (!w->failed && (!w->stopped || check_space(w, 65536.0, tmp.msg, sizeof tmp.msg) == 0)) {
         if (d) rc |= write_closing_attrs(f, d);
-        if (w->has_capture && w->capture_set) rc |= write_capture_attrs(f, &w->capture);
+        if (w->has_capture && w->capture_set) rc |= write_capture_attrs(f, &w->capture, w->has_control);
         if (!d) {
             char when[CD_H5_UTC_LEN];
             utc_now(when, sizeof when);

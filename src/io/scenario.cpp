@@ -1590,29 +1590,91 @@ struct Builder {
         joint_props(t, id, rev, has_lim ? lim : nullptr);
     }
 
+    struct Run {
+        std::string title;
+        double duration = 0, output_dt = 0, flush_every = 1.0;
+        int event_capacity = 4096;
+        bool interpolate = false, no_compress = false;
+        int hand = -1, object = -1, feature = -1;
+        int palm = -1;                 /* the palm body (the hand's base, or the link a gripper is mounted on) */
+        bool close_trigger = false;    /* [gripper] close.on = "trigger" */
+        std::vector<int> close_act;    /* the gripper's motors and their closing command */
+        std::vector<double> close_u;
+        std::unique_ptr<cd_ctrl_config> control; /* [control] */
+        std::vector<double> palm_pos = {0, 0, 0}, palm_rot = {1, 0, 0, 0, 1, 0, 0, 0, 1}; /* palm frame on it */
+        double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
+        double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
+    };
+
     /* [gripper] of a mechanism type: generates the hand (a fixed palm box and
      * fingers of capsule links with check points along them), its drive
      * (actuators or clutched fingers) and the pairs of its check points with
      * every target's shapes. docs/grippers.md. */
-    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def)
+    /* what the drive (stage 2) needs of the hand built in stage 1 */
+    struct GripState {
+        std::string name;
+        std::vector<double> L, M;
+        std::vector<std::vector<int>> fingers;
+        int nf = 0, sys = -1;
+        double rad = 0;
+    } grip;
+
+    /* stage 1: the palm and the fingers (a mounted gripper's fingers are
+     * links of its system: built right after that system's links, before the
+     * next system); stage 2: the drive and the contact pairs (after every
+     * system); 0: both */
+    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def, Run &run, int stage = 0)
     {
+      if (stage != 2) {
         std::string name = "hand";
+        /* mounted on a link of an existing system (`system`, `attach`): the
+         * palm is that link, the fingers become its branches */
+        SysInfo *host = nullptr;
+        int attach = -1;
+        if (Entry *g = t.get("system")) {
+            std::string gs = str_of(*g->val, t.kp("system"));
+            host = find_sys(gs);
+            if (!host) fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+            if (host->is_target) fail_at(g->val->loc, t.kp("system"), "expected a [[system]] (the chaser), got the target '" + gs + "'");
+            if (Entry *e = t.get("name")) fail_at(e->kloc, t.kp("name"), "does not apply to a gripper mounted on a system (the hand is that system)");
+            const Node &an = t.need("attach", "the name of the link the palm is mounted on");
+            std::string a = str_of(an, t.kp("attach"));
+            auto it = host->body_at.find(a);
+            if (it == host->body_at.end())
+                fail_at(an.loc, t.kp("attach"), "expected 'base' or a link of system '" + gs + "', got '" + a + "'" + hint(a, host->body_names()));
+            attach = host->bodies[it->second].id;
+            for (int b = attach + 1; b < m->nbody; b++)
+                if (m->body_parent[b] == attach)
+                    fail_at(an.loc, t.kp("attach"), "expected a link without child links (the fingers become its only branches), got '" + a + "' (parent of '" + m->body_name[b] + "')");
+            for (const char *k : {"palm", "f0_l0"})
+                if (host->shape_at.count(k)) fail_at(an.loc, t.kp("attach"), std::string("expected a system without a shape named '") + k + "' (the gripper adds it)");
+            name = gs;
+        } else if (Entry *e = t.get("attach")) {
+            fail_at(e->kloc, t.kp("attach"), "needs 'system' (the system whose link carries the palm)");
+        }
         if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
-        if (find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
+        if (!host && find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
         std::string preset = "two_opposed";
-        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120"});
-        int nf = preset == "two_opposed" ? 2 : 3;
+        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120", "two_pairs"});
+        int nf = preset == "two_opposed" ? 2 : preset == "three_120" ? 3 : 4;
         /* palm */
-        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0}, prot[9];
-        cd_m3_identity(prot);
+        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0}, Rp[9];
+        cd_m3_identity(Rp);
         if (Entry *e = t.get("palm")) {
             std::string pp = t.kp("palm");
             Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position", "rpy_deg", "quaternion"});
             pt.vec("size", 3, psize, Range::Pos);
+            if (host && pt.get("mass"))
+                fail_at(pt.get("mass")->kloc, pt.kp("mass"), "does not apply to a gripper mounted on a link (include the palm's mass in the link's)");
             pmass = pt.num("mass", pmass, Range::Pos);
             pt.vec("position", 3, ppos);
-            rotation_of(pt, prot);
+            rotation_of(pt, Rp);
         }
+        /* the palm frame on its body (mounted) or the hand's fixed base at ppos */
+        double pbpos[3] = {0, 0, 0};
+        if (host) cd_v3_copy(pbpos, ppos);
+        run.palm_rot.assign(Rp, Rp + 9);
+        run.palm_pos.assign(pbpos, pbpos + 3);
         /* fingers */
         std::vector<double> L, M;
         {
@@ -1631,6 +1693,33 @@ struct Builder {
         double rad = t.num("radius", 0.008, Range::Pos);
         double spacing = t.num("spacing", 0.1, Range::Pos);
         double cps = t.num("checkpoint_spacing", rad, Range::Pos);
+        /* passive elements of every finger joint (a release spring, a damper, stops) */
+        cd_joint_props fjp = cd_joint_props_default();
+        bool fj_any = false;
+        std::vector<double> fq0;       /* initial finger joint angles, base to tip */
+        const Node *fq0_node = nullptr;
+        if (Entry *e = t.get("finger_joint")) {
+            std::string fp = t.kp("finger_joint");
+            Tab ft(table_of(*e->val, fp), fp, {"spring", "damping", "limit_deg", "q0_deg"});
+            fjp.stiffness = ft.num("spring", 0.0, Range::NonNeg);
+            fjp.damping = ft.num("damping", 0.0, Range::NonNeg);
+            if (Entry *l = ft.get("limit_deg")) {
+                double lim[2];
+                vec_of(*l->val, ft.kp("limit_deg"), 2, lim, Range::Any, "an array [lower, upper]");
+                if (!(lim[0] <= 0 && 0 <= lim[1] && lim[0] < lim[1]))
+                    fail_at(l->val->loc, ft.kp("limit_deg"), "expected lower <= 0 <= upper, lower < upper (the fingers start straight), got " + render(*l->val));
+                fjp.limited = 1;
+                fjp.lower = lim[0] * DEG;
+                fjp.upper = lim[1] * DEG;
+            }
+            if (Entry *q = ft.get("q0_deg")) {
+                const Node &qn = *q->val;
+                if (qn.kind != NK::Array) fail_at(qn.loc, ft.kp("q0_deg"), "expected an array of initial angles [deg], one per finger link, got " + render(qn));
+                for (size_t i = 0; i < qn.arr.size(); i++) fq0.push_back(num_of(*qn.arr[i], idx(ft.kp("q0_deg"), i), Range::Any) * DEG);
+                fq0_node = &qn;
+            }
+            fj_any = true;
+        }
         /* the hand system */
         cd_system_desc sd = cd_system_desc_default();
         sd.name = name.c_str();
@@ -1640,42 +1729,72 @@ struct Builder {
         sd.inertia[4] = pmass * (psize[0] * psize[0] + psize[2] * psize[2]) / 12.0;
         sd.inertia[8] = pmass * (psize[0] * psize[0] + psize[1] * psize[1]) / 12.0;
         for (int k = 0; k < 3; k++) sd.pos[k] = ppos[k];
-        cd_m3_to_quat(sd.quat, prot);
-        SysInfo S;
-        S.name = name;
-        S.loc = t.n->loc;
-        S.path = t.path;
-        S.id = cd_model_add_system(m.get(), &sd, &err);
-        if (S.id < 0) builder_fail(t.n->loc, t.path);
-        S.add_body("base", m->sys_body_adr[S.id]);
-        double half[3] = {psize[0] / 2, psize[1] / 2, psize[2] / 2}, z3[3] = {0, 0, 0};
-        int palm_shape = cd_model_add_shape(m.get(), S.bodies[0].id, CD_SHAPE_BOX, z3, nullptr, half, nullptr, 0, &err);
+        SysInfo Snew;
+        SysInfo &S = host ? *host : Snew;
+        if (!host) {
+            S.name = name;
+            S.loc = t.n->loc;
+            S.path = t.path;
+            S.id = cd_model_add_system(m.get(), &sd, &err);
+            if (S.id < 0) builder_fail(t.n->loc, t.path);
+            S.add_body("base", m->sys_body_adr[S.id]);
+            attach = S.bodies[0].id;
+        }
+        BodyInfo *PB = nullptr;
+        for (auto &bi : S.bodies)
+            if (bi.id == attach) PB = &bi;
+        run.palm = attach;
+        /* a point of the palm frame on the palm body */
+        auto on_palm = [&](const double pl[3], double out[3]) {
+            cd_m3_mulv(out, Rp, pl);
+            cd_v3_add(out, out, pbpos);
+        };
+        double half[3] = {psize[0] / 2, psize[1] / 2, psize[2] / 2};
+        int palm_shape = cd_model_add_shape(m.get(), attach, CD_SHAPE_BOX, pbpos, Rp, half, nullptr, 0, &err);
         if (palm_shape < 0) builder_fail(t.n->loc, t.path);
         S.shape_at.emplace("palm", S.shapes.size());
         S.shapes.push_back({"palm", palm_shape});
         /* palm-face check points, tops flush with the face y = +size_y/2 */
-        for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
-            double p[3] = {x, half[1] - rad, 0};
-            if (cd_model_add_checkpoint(m.get(), S.bodies[0].id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
-            S.bodies[0].ncp++;
-            S.ncp++;
-        }
+        /* two_pairs: two opposed pairs at z = -/+ pair_offset (a wide hand for a bar) */
+        double zoff = 0;
+        if (preset == "two_pairs") zoff = t.num("pair_offset", spacing / 2, Range::Pos);
+        else if (Entry *e = t.get("pair_offset")) fail_at(e->kloc, t.kp("pair_offset"), "applies to hand = 'two_pairs' only");
+        for (int row = 0; row < (preset == "two_pairs" ? 2 : 1); row++)
+            for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
+                double pl[3] = {x, half[1] - rad, row == 0 ? -zoff : zoff}, p[3];
+                on_palm(pl, p);
+                if (cd_model_add_checkpoint(m.get(), attach, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
+                PB->ncp++;
+                S.ncp++;
+            }
         std::vector<std::vector<int>> fingers(nf);
         for (int f = 0; f < nf; f++) {
-            double phi = preset == "two_opposed" ? (f == 0 ? M_PI : 0.0) : M_PI / 2 + 2 * M_PI * f / 3.0;
+            double phi = preset == "three_120" ? M_PI / 2 + 2 * M_PI * f / 3.0 : (f % 2 == 0 ? M_PI : 0.0);
+            double fz = preset == "two_pairs" ? (f < 2 ? -zoff : zoff) : 0.0;
             /* radial direction e_r; the finger closes about e_r x y */
             double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {-er[2], 0, er[0]};
-            int parent = S.bodies[0].id;
+            int parent = attach;
             for (size_t j = 0; j < L.size(); j++) {
                 cd_link_desc d = cd_link_desc_default();
                 std::string ln = "f" + std::to_string(f) + "_l" + std::to_string(j);
+                if (S.body_at.count(ln)) fail_at(t.n->loc, t.path, "expected a system without a link named '" + ln + "' (the gripper adds it)");
                 d.name = ln.c_str();
                 d.parent = parent;
-                if (j == 0) { d.pos[0] = er[0] * spacing / 2; d.pos[1] = half[1]; d.pos[2] = er[2] * spacing / 2; }
-                else d.pos[1] = L[j - 1];
+                if (j == 0) {
+                    double pl[3] = {er[0] * spacing / 2, half[1], er[2] * spacing / 2 + fz};
+                    on_palm(pl, d.pos);
+                    cd_m3_copy(d.rot, Rp);
+                } else d.pos[1] = L[j - 1];
                 cd_v3_copy(d.axis, ax);
                 d.mass = M[j];
                 d.com[1] = L[j] / 2;
+                if (fq0_node) {
+                    if (fq0.size() != L.size())
+                        fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected " + std::to_string(L.size()) + " angles (one per finger link), got " + render(*fq0_node));
+                    d.q0 = fq0[j];
+                    if (fjp.limited && (d.q0 < fjp.lower - 1e-12 || d.q0 > fjp.upper + 1e-12))
+                        fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected angles within limit_deg, got " + render(*fq0_node));
+                }
                 double It = M[j] * (3 * rad * rad + L[j] * L[j]) / 12.0, Ia = M[j] * rad * rad / 2;
                 memset(d.inertia, 0, sizeof d.inertia);
                 d.inertia[0] = It; d.inertia[4] = Ia; d.inertia[8] = It;
@@ -1694,18 +1813,40 @@ struct Builder {
                     S.bodies.back().ncp++;
                     S.ncp++;
                 }
+                if (fj_any && cd_model_set_joint(m.get(), id, &fjp, &err) != CD_OK) builder_fail(t.n->loc, t.path);
                 fingers[f].push_back(id);
                 parent = id;
             }
         }
-        sys_at.emplace(S.name, sys.size());
-        sys.push_back(S);
+        if (!host) {
+            sys_at.emplace(S.name, sys.size());
+            sys.push_back(S);
+        }
+        run.hand = S.id;
+        grip.name = name;
+        grip.L = L;
+        grip.M = M;
+        grip.fingers = fingers;
+        grip.nf = nf;
+        grip.sys = S.id;
+        grip.rad = rad;
+        if (stage == 1) return;
+      }
+        const std::string name = grip.name;
+        const std::vector<double> &L = grip.L, &M = grip.M;
+        const std::vector<std::vector<int>> &fingers = grip.fingers;
+        const int nf = grip.nf;
         /* the drive */
         double T = t.num("torque", 0.2, Range::Any), open_at = t.num("open_at", 0.0, Range::NonNeg);
         double ctime = 1.0, cangle = 120.0 * DEG, cstart = 0.0;
         if (Entry *e = t.get("close")) {
             std::string cp = t.kp("close");
-            Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start"});
+            Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start", "on"});
+            if (Entry *o = ct.get("on")) run.close_trigger = choice_of(*o->val, ct.kp("on"), {"time", "trigger"}) == "trigger";
+            if (run.close_trigger && ty != "soft" && ty != "tako")
+                fail_at(ct.get("on")->val->loc, ct.kp("on"), "expected 'time' for a '" + ty + "' gripper ('trigger' needs a 'soft' or 'tako' gripper: its motors take the controller's command; clutched fingers follow a time schedule)");
+            if (run.close_trigger && ct.get("start")) fail_at(ct.get("start")->kloc, ct.kp("start"), "does not apply with on = 'trigger' (the [control] grasp trigger starts the closing)");
+            if (run.close_trigger && open_at > 0) fail_at(t.get("open_at")->kloc, t.kp("open_at"), "does not apply with close.on = 'trigger'");
             ctime = ct.num("time", ctime, Range::Pos);
             cangle = ct.num("angle_deg", 120.0, Range::Pos) * DEG;
             cstart = ct.num("start", 0.0, Range::NonNeg);
@@ -1743,13 +1884,17 @@ struct Builder {
                     a.name = an.c_str();
                     a.type = CD_ACT_STEPS;
                     a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
+                    if (run.close_trigger) { a.type = CD_ACT_NONE; a.ntbl = 0; } /* u = ctrl, from the [control] trigger */
                     if (cstart > 0) { /* no torque before the closing starts */
                         st.insert(st.begin(), 0.0); sv.insert(sv.begin(), 0.0);
                         a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
                     }
                     a.ntrn = (int)jb.size(); a.trn_body = jb.data(); a.trn_ratio = jr.data();
                     a.stall_torque = Ts; a.noload_speed = w0;
-                    if (cd_model_add_actuator(m.get(), &a, &err) < 0) builder_fail(t.n->loc, t.path);
+                    int aid = cd_model_add_actuator(m.get(), &a, &err);
+                    if (aid < 0) builder_fail(t.n->loc, t.path);
+                    run.close_act.push_back(aid);
+                    run.close_u.push_back(T);
                     if (cstart > 0) { st.erase(st.begin()); sv.erase(sv.begin()); }
                 }
             }
@@ -1800,19 +1945,131 @@ struct Builder {
         for (int f = 0; f < nf; f++)
             for (int g = 0; g < nf; g++) {
                 if (g == f) continue;
+                {   /* fingers that turn in parallel planes farther apart than two radii never meet */
+                    int bf = fingers[f][0], bg = fingers[g][0];
+                    double af[3], ag[3], cr[3], dp[3];
+                    cd_m3_mulv(af, m->body_jnt_rot + 9 * bf, m->body_axis + 3 * bf);
+                    cd_m3_mulv(ag, m->body_jnt_rot + 9 * bg, m->body_axis + 3 * bg);
+                    cd_v3_cross(cr, af, ag);
+                    cd_v3_sub(dp, m->body_jnt_pos + 3 * bf, m->body_jnt_pos + 3 * bg);
+                    if (cd_v3_norm(cr) < 1e-9 && std::fabs(cd_v3_dot(dp, af)) > 2 * grip.rad + 1e-12) continue;
+                }
                 for (int b : fingers[f])
                     for (int c : fingers[g]) {
                         int shp = -1;
                         for (int k = 0; k < m->nshape; k++)
                             if (m->shape_body[k] == c) shp = k;
-                        if (shp >= 0 && cd_model_add_pair(m.get(), S.id, b, shp, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+                        if (shp >= 0 && cd_model_add_pair(m.get(), grip.sys, b, shp, lid, &err) < 0) builder_fail(t.n->loc, t.path);
                     }
             }
         for (auto &s2 : sys) {
             if (!s2.is_target) continue;
             for (auto &sh : s2.shapes)
-                if (cd_model_add_pair(m.get(), S.id, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+                if (cd_model_add_pair(m.get(), grip.sys, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
         }
+    }
+
+    /* [control]: the built-in capture controller (control.h, docs/capture.md) */
+    void control(Entry &e, Run &run)
+    {
+        Tab t(table_of(*e.val, "control"), "control",
+              {"type", "system", "fixture", "grasp_point", "grasp_rpy_deg", "approach_axis", "lateral_tol", "kp_pos",
+               "kp_rot", "v_max", "w_max", "dls", "qd_max_deg_s", "rate_gain", "tau_max", "trigger_distance",
+               "close_time", "impedance", "attitude", "misalign", "start"});
+        choice_of(t.need("type", "'capture'"), t.kp("type"), {"capture"});
+        std::unique_ptr<cd_ctrl_config> c(new cd_ctrl_config(cd_ctrl_config_default()));
+        /* the chaser: the gripper's system by default */
+        if (Entry *g = t.get("system")) {
+            std::string gs = str_of(*g->val, t.kp("system"));
+            SysInfo *s = find_sys(gs);
+            if (!s) fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+            c->sys = s->id;
+        } else if (run.palm >= 0 && m->body_sys[run.palm] == run.hand) {
+            c->sys = run.hand;
+        } else {
+            t.need("system", "the chaser's name (or a [gripper] mounted with system/attach)");
+        }
+        if (m->sys_base_type[c->sys] != CD_BASE_FREE)
+            fail_at(t.n->loc, t.kp("system"), std::string("expected a free-floating chaser, got '") + m->sys_name[c->sys] + "' (fixed base)");
+        if (!(run.hand == c->sys && run.palm >= 0 && run.palm != m->sys_body_adr[c->sys]))
+            fail_at(t.n->loc, t.path, std::string("expected a [gripper] mounted on a link of '") + m->sys_name[c->sys] + "' (system, attach): the controller moves its palm");
+        c->palm = run.palm;
+        for (int k = 0; k < 3; k++) c->palm_pos[k] = run.palm_pos[k];
+        for (int k = 0; k < 9; k++) c->palm_rot[k] = run.palm_rot[k];
+        /* the fixture: a shape "system/shape" */
+        {
+            const Node &fn = t.need("fixture", "a shape \"system/shape\" of the target (its centre and frame)");
+            std::string f = str_of(fn, t.kp("fixture"));
+            size_t sl = f.find('/');
+            SysInfo *s = sl == std::string::npos ? nullptr : find_sys(f.substr(0, sl));
+            if (!s || !s->shape_at.count(f.substr(sl + 1)))
+                fail_at(fn.loc, t.kp("fixture"), "expected a shape \"system/shape\" of another system, got '" + f + "'");
+            if (s->id == c->sys) fail_at(fn.loc, t.kp("fixture"), "expected a shape of another system than the chaser, got '" + f + "'");
+            int sh = s->shapes[s->shape_at[f.substr(sl + 1)]].second;
+            c->fixture_body = m->shape_body[sh];
+            for (int k = 0; k < 3; k++) c->fixture_pos[k] = m->shape_pos[3 * sh + k];
+            for (int k = 0; k < 9; k++) c->fixture_rot[k] = m->shape_rot[9 * sh + k];
+        }
+        t.vec("grasp_point", 3, c->grasp_point);
+        if (Entry *g = t.get("grasp_rpy_deg")) {
+            double r[3];
+            vec_of(*g->val, t.kp("grasp_rpy_deg"), 3, r);
+            cd_m3_from_rpy(c->grasp_rot, r[0] * DEG, r[1] * DEG, r[2] * DEG);
+        }
+        if (Entry *g = t.get("approach_axis")) {
+            vec_of(*g->val, t.kp("approach_axis"), 3, c->approach_axis);
+            if (!(cd_v3_norm(c->approach_axis) > 1e-12)) fail_at(g->val->loc, t.kp("approach_axis"), "expected a non-zero vector, got " + render(*g->val));
+        }
+        c->lateral_tol = t.num("lateral_tol", c->lateral_tol, Range::Pos);
+        c->kp_pos = t.num("kp_pos", c->kp_pos, Range::NonNeg);
+        c->kp_rot = t.num("kp_rot", c->kp_rot, Range::NonNeg);
+        c->v_max = t.num("v_max", c->v_max, Range::Pos);
+        c->w_max = t.num("w_max", c->w_max, Range::Pos);
+        c->dls = t.num("dls", c->dls, Range::Pos);
+        c->qd_max = t.num("qd_max_deg_s", c->qd_max / DEG, Range::Pos) * DEG;
+        c->rate_gain = t.num("rate_gain", c->rate_gain, Range::Pos);
+        c->tau_max = t.num("tau_max", c->tau_max, Range::NonNeg);
+        c->trigger_distance = t.num("trigger_distance", c->trigger_distance, Range::Pos);
+        c->close_time = t.num("close_time", c->close_time, Range::NonNeg);
+        if (Entry *g = t.get("start")) c->start_hold = choice_of(*g->val, t.kp("start"), {"approach", "hold"}) == "hold";
+        if (Entry *g = t.get("impedance")) {
+            std::string ip = t.kp("impedance");
+            Tab it(table_of(*g->val, ip), ip, {"frequency", "damping_ratio"});
+            c->imp_wn = it.num("frequency", c->imp_wn, Range::NonNeg);
+            c->imp_zeta = it.num("damping_ratio", c->imp_zeta, Range::NonNeg);
+        }
+        if (Entry *g = t.get("attitude")) {
+            std::string ap = t.kp("attitude");
+            Tab at(table_of(*g->val, ap), ap, {"on", "kp", "kd", "tau_max"});
+            c->attitude = at.get("on") ? (bool_of(*at.get("on")->val, at.kp("on")) ? 1 : 0) : 1;
+            c->att_kp = at.num("kp", c->att_kp, Range::NonNeg);
+            c->att_kd = at.num("kd", c->att_kd, Range::NonNeg);
+            c->att_tau_max = at.num("tau_max", c->att_tau_max, Range::Pos);
+        }
+        /* misalignment of the approach: an aim error (position in the palm
+         * frame, orientation) and a velocity error of the target */
+        if (Entry *g = t.get("misalign")) {
+            std::string mp = t.kp("misalign");
+            Tab mt(table_of(*g->val, mp), mp, {"position", "rpy_deg", "velocity"});
+            double dp[3] = {0, 0, 0}, r[3] = {0, 0, 0}, dv[3] = {0, 0, 0}, Re[9], G[9];
+            mt.vec("position", 3, dp);
+            mt.vec("rpy_deg", 3, r);
+            mt.vec("velocity", 3, dv);
+            cd_v3_add(c->grasp_point, c->grasp_point, dp);
+            cd_m3_from_rpy(Re, r[0] * DEG, r[1] * DEG, r[2] * DEG);
+            cd_m3_mul(G, c->grasp_rot, Re);
+            cd_m3_copy(c->grasp_rot, G);
+            int ts = m->body_sys[c->fixture_body];
+            if (m->sys_base_type[ts] == CD_BASE_FREE) cd_v3_add(m->sys_vel0 + 3 * ts, m->sys_vel0 + 3 * ts, dv);
+        }
+        if (run.close_trigger) {
+            if (run.close_act.size() > CD_CTRL_MAX_ACT) fail_at(t.n->loc, t.path, "expected at most " + std::to_string(CD_CTRL_MAX_ACT) + " gripper motors");
+            c->nclose = (int)run.close_act.size();
+            for (size_t k = 0; k < run.close_act.size(); k++) { c->close_act[k] = run.close_act[k]; c->close_u[k] = run.close_u[k]; }
+        }
+        c->user_switch0 = m->nuser;
+        if (cd_model_set_user_switches(m.get(), m->nuser + 2, &err) != CD_OK) builder_fail(t.n->loc, t.path);
+        run.control = std::move(c);
     }
 
     /* [[system]] (is_target = false) or the [[target]] sugar */
@@ -2020,15 +2277,6 @@ struct Builder {
         if (cd_model_add_pair(m.get(), cps->id, body, shape, lid, &err) < 0) builder_fail(node.loc, path);
     }
 
-    struct Run {
-        std::string title;
-        double duration = 0, output_dt = 0, flush_every = 1.0;
-        int event_capacity = 4096;
-        bool interpolate = false, no_compress = false;
-        int hand = -1, object = -1, feature = -1;
-        double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
-        double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
-    };
 
     /* The work of a run is bounded before it starts: max_rhs_evals and
      * max_wall_time (0 = no limit) are enforced during the run (the CLI's
@@ -2073,7 +2321,7 @@ struct Builder {
         m.reset(cd_model_create());
         if (!m) throw std::bad_alloc();
         Tab top(&root, "", {"title", "include", "simulation", "contact", "system", "target", "pair", "gripper", "actuator",
-                            "capture"});
+                            "capture", "control"});
         if (Entry *e = top.get("include"))
             fail_at(e->kloc, "include", "expected 'include' only at the top of a file, got it from an override");
 
@@ -2156,9 +2404,30 @@ struct Builder {
         Entry *se = top.get("system"), *te = top.get("target");
         if (!se && !te)
             fail_at(root.loc, "system", "missing required key (expected at least one [[system]] or [[target]])");
+        /* a mechanism gripper mounted on a system's link: its fingers are
+         * built right after that system's links (bodies of a system are
+         * contiguous) */
+        std::unique_ptr<Tab> gt;
+        std::string gty, gsys;
+        if (Entry *e = top.get("gripper")) {
+            gt.reset(new Tab(table_of(*e->val, "gripper"), "gripper",
+                             {"type", "system", "attach", "name", "hand", "palm", "links", "masses", "radius", "spacing",
+                              "checkpoint_spacing", "close", "torque", "open_at", "ratios", "motor", "clutch", "finger_joint", "pair_offset"}));
+            const Node &tn = gt->need("type", "one of 'torque', 'soft', 'tako', 'space', 'torque_switch'");
+            gty = choice_of(tn, gt->kp("type"), {"torque", "soft", "tako", "space", "torque_switch"});
+            if (gty != "torque")
+                if (Entry *g = gt->get("system")) gsys = str_of(*g->val, gt->kp("system"));
+        }
+        bool mounted = false;
         if (se) {
             auto v = tables_of(*se->val, "system", "[[system]]");
-            for (size_t i = 0; i < v.size(); i++) system(*v[i], se->val->kind == NK::Array ? idx("system", i) : "system", false);
+            for (size_t i = 0; i < v.size(); i++) {
+                system(*v[i], se->val->kind == NK::Array ? idx("system", i) : "system", false);
+                if (!gsys.empty() && sys.back().name == gsys) {
+                    gripper_hand(*gt, gty, def, run, 1);
+                    mounted = true;
+                }
+            }
         }
         if (te) {
             auto v = tables_of(*te->val, "target", "[[target]]");
@@ -2172,12 +2441,9 @@ struct Builder {
         }
 
         /* [gripper] */
-        if (Entry *e = top.get("gripper")) {
-            Tab t(table_of(*e->val, "gripper"), "gripper",
-                  {"type", "system", "name", "hand", "palm", "links", "masses", "radius", "spacing", "checkpoint_spacing",
-                   "close", "torque", "open_at", "ratios", "motor", "clutch"});
-            const Node &tn = t.need("type", "one of 'torque', 'soft', 'tako', 'space', 'torque_switch'");
-            std::string ty = choice_of(tn, t.kp("type"), {"torque", "soft", "tako", "space", "torque_switch"});
+        if (gt) {
+            const Tab &t = *gt;
+            const std::string &ty = gty;
             if (ty == "torque") {
                 for (auto &k : t.n->tab)
                     if (k.key != "type" && k.key != "system")
@@ -2190,10 +2456,12 @@ struct Builder {
                 }
                 /* type "torque": the joints are driven by their own `actuator` tables */
             } else {
-                if (Entry *g = t.get("system"))
-                    fail_at(g->kloc, t.kp("system"), "does not apply to a '" + ty + "' gripper (it builds its own hand; name it with 'name')");
-                gripper_hand(t, ty, def);
-                run.hand = sys.back().id;
+                if (!gsys.empty() && !mounted) {
+                    /* not a [[system]] (a target, or no such name): stage 1 says why */
+                    gripper_hand(t, ty, def, run, 1);
+                    fail_at(t.get("system")->val->loc, t.kp("system"), "expected a [[system]] name, got '" + gsys + "'");
+                }
+                gripper_hand(t, ty, def, run, mounted ? 2 : 0);
             }
         }
 
@@ -2227,6 +2495,11 @@ struct Builder {
             run.workspace = t.num("workspace", run.workspace, Range::Pos);
         }
         if (run.hand == run.object) run.object = -1;
+
+        /* [control] (after the gripper: it closes the gripper's motors) */
+        if (Entry *e = top.get("control")) control(*e, run);
+        else if (run.close_trigger)
+            fail_at(top.get("gripper")->val->loc, "gripper.close.on", "expected 'time' without a [control] table (it has the grasp trigger)");
 
         /* [[pair]] */
         if (Entry *e = top.get("pair")) {
@@ -2262,13 +2535,18 @@ struct Builder {
         m->opt.equilibrium_start = eq;
         if (!d) builder_fail(first->frame_loc, first->path + ".frame");
         cd_kinematics(m.get(), d.get());
-        int pb = m->sys_body_adr[run.hand];
-        const double *R = d->body_R + 9 * pb, *x = d->body_x + 3 * pb, *w = d->body_w + 3 * pb;
-        double vp[3]; /* the palm frame origin's velocity: v_com + w x (x - com) */
+        /* the palm frame: run.palm_pos / palm_rot on the palm body */
+        int pb = run.palm >= 0 ? run.palm : m->sys_body_adr[run.hand];
+        const double *Rb = d->body_R + 9 * pb, *xb = d->body_x + 3 * pb, *w = d->body_w + 3 * pb;
+        double R[9], x[3], vp[3];
         {
             double c[3], r[3], wr[3];
-            cd_m3_mulv(c, R, m->body_com + 3 * pb);
-            for (int k = 0; k < 3; k++) r[k] = -c[k];
+            cd_m3_mul(R, Rb, run.palm_rot.data());
+            cd_m3_mulv(r, Rb, run.palm_pos.data());
+            for (int k = 0; k < 3; k++) x[k] = xb[k] + r[k];
+            /* the palm frame origin's velocity: v_com + w x (origin - com) */
+            cd_m3_mulv(c, Rb, m->body_com + 3 * pb);
+            for (int k = 0; k < 3; k++) r[k] -= c[k];
             cd_v3_cross(wr, w, r);
             for (int k = 0; k < 3; k++) vp[k] = d->body_v[3 * pb + k] + wr[k];
         }
@@ -2358,6 +2636,7 @@ void free_scenario(cd_scenario *sc)
     std::free(sc->title);
     std::free(sc->text);
     std::free(sc->overrides);
+    std::free(sc->control);
     std::free(sc);
 }
 
@@ -2403,6 +2682,17 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->capture_dwell = run.dwell;
     sc->capture_workspace = run.workspace;
     sc->capture_feature = run.feature;
+    if (run.control) {
+        sc->control = (cd_ctrl_config *)std::malloc(sizeof *sc->control);
+        if (!sc->control) {
+            free_scenario(sc);
+            throw std::bad_alloc();
+        }
+        *sc->control = *run.control;
+    }
+    sc->capture_palm = run.palm;
+    for (int k = 0; k < 3; k++) sc->capture_palm_pos[k] = run.palm_pos[k];
+    for (int k = 0; k < 9; k++) sc->capture_palm_rot[k] = run.palm_rot[k];
     sc->max_wall_time = run.max_wall_time;
     sc->max_rhs_evals = run.max_rhs_evals;
     sc->min_steps = run.min_steps;

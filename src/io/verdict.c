@@ -37,16 +37,44 @@ cd_monitor_opts cd_monitor_opts_default(void)
     o.dwell = 0.2;
     o.workspace = 0;
     o.feature = -1;
+    o.palm = -1;
+    memset(o.palm_pos, 0, sizeof o.palm_pos);
+    memset(o.palm_rot, 0, sizeof o.palm_rot);
+    o.palm_rot[0] = o.palm_rot[4] = o.palm_rot[8] = 1.0;
     return o;
 }
 
-/* the first link of each finger: the hand base's direct children */
-#define MAXF 16
-static int fingers(const cd_model *m, int hand, int *first)
+/* the palm body: the hand's base, or the link a gripper is mounted on */
+static int palm_of(const cd_model *m, const cd_monitor_opts *o)
 {
-    int b0 = m->sys_body_adr[hand], b, n = 0;
-    for (b = b0 + 1; b < b0 + m->sys_nbody[hand] && n < MAXF; b++)
-        if (m->body_parent[b] == b0) first[n++] = b;
+    return o->palm >= 0 ? o->palm : m->sys_body_adr[o->hand];
+}
+
+/* the palm frame, world */
+static void palm_frame(const cd_model *m, const cd_data *d, const cd_monitor_opts *o, double x[3], double R[9])
+{
+    int pb = palm_of(m, o);
+    double t[3];
+    cd_m3_mulv(t, d->body_R + 9 * pb, o->palm_pos);
+    cd_v3_add(x, d->body_x + 3 * pb, t);
+    cd_m3_mul(R, d->body_R + 9 * pb, o->palm_rot);
+}
+
+/* 1 if body b hangs below body p (p excluded) */
+static int below(const cd_model *m, int b, int p)
+{
+    for (b = m->body_parent[b]; b >= 0; b = m->body_parent[b])
+        if (b == p) return 1;
+    return 0;
+}
+
+/* the first link of each finger: the palm's direct children */
+#define MAXF 16
+static int fingers(const cd_model *m, const cd_monitor_opts *o, int *first)
+{
+    int hand = o->hand, b0 = m->sys_body_adr[hand], pb = palm_of(m, o), b, n = 0;
+    for (b = pb + 1; b < b0 + m->sys_nbody[hand] && n < MAXF; b++)
+        if (m->body_parent[b] == pb) first[n++] = b;
     return n;
 }
 
@@ -123,9 +151,9 @@ static void hull_support(const void *obj, const ccd_vec3_t *dir, ccd_vec3_t *out
     ccdVec3Set(out, h->p[best][0], h->p[best][1], h->p[best][2]);
 }
 
-static int enclosed(const cd_model *m, const cd_data *d, int hand, const double c[3])
+static int enclosed(const cd_model *m, const cd_data *d, const cd_monitor_opts *o, const double c[3])
 {
-    int first[MAXF], nf = fingers(m, hand, first), f, k, parallel = 1;
+    int hand = o->hand, first[MAXF], nf = fingers(m, o, first), f, k, parallel = 1;
     double ax0[3];
     if (nf < 2) return 0;
     cd_v3_copy(ax0, d->body_axisw + 3 * first[0]);
@@ -188,6 +216,9 @@ cd_monitor_opts cd_scenario_monitor_opts(const cd_scenario *sc)
     o.w_max = sc->capture_w_max;
     o.dwell = sc->capture_dwell;
     o.workspace = sc->capture_workspace;
+    o.palm = sc->capture_palm;
+    memcpy(o.palm_pos, sc->capture_palm_pos, sizeof o.palm_pos);
+    memcpy(o.palm_rot, sc->capture_palm_rot, sizeof o.palm_rot);
     return o;
 }
 
@@ -195,7 +226,7 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
                           cd_error *err)
 {
     int first[MAXF], nf, f, k, hb;
-    double reach = 0;
+    double reach = 0, xp[3], Rp[9];
     memset(mo, 0, sizeof *mo);
     mo->opt = opt ? *opt : cd_monitor_opts_default();
     if (mo->opt.hand < 0 || mo->opt.hand >= m->nsys || mo->opt.object < 0 || mo->opt.object >= m->nsys ||
@@ -212,13 +243,18 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
         cd_error_set(err, CD_EINVAL, "verdict: the object '%s' must be free-floating", m->sys_name[mo->opt.object]);
         return CD_EINVAL;
     }
-    hb = m->sys_body_adr[mo->opt.hand];
-    nf = fingers(m, mo->opt.hand, first);
+    if (mo->opt.palm >= m->nbody || (mo->opt.palm >= 0 && m->body_sys[mo->opt.palm] != mo->opt.hand)) {
+        cd_error_set(err, CD_EINVAL, "verdict: the palm (body %d) is not a body of the hand", mo->opt.palm);
+        return CD_EINVAL;
+    }
+    hb = palm_of(m, &mo->opt);
+    palm_frame(m, d, &mo->opt, xp, Rp);
+    nf = fingers(m, &mo->opt, first);
     for (f = 0; f < nf; f++) {
         int ch[32], nc = chain(m, mo->opt.hand, first[f], ch, 32);
         double tip[3], r[3];
         tip_of(m, d, ch[nc - 1], tip);
-        cd_v3_sub(r, tip, d->body_x + 3 * hb);
+        cd_v3_sub(r, tip, xp);
         if (cd_v3_norm(r) > reach) reach = cd_v3_norm(r);
     }
     for (k = 0; k < m->nshape; k++)
@@ -237,9 +273,10 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
 
 void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
 {
-    int hand = mo->opt.hand, obj = mo->opt.object, hb = m->sys_body_adr[hand], ob = m->sys_body_adr[obj], k, b;
+    int hand = mo->opt.hand, obj = mo->opt.object, hb = palm_of(m, &mo->opt), ob = m->sys_body_adr[obj], k, b;
+    int hend = m->sys_body_adr[hand] + m->sys_nbody[hand];
     unsigned long h = 1469598103UL;
-    double c[3], r[3], vp[3], t3[3], wrel[3];
+    double c[3], r[3], vp[3], t3[3], wrel[3], xp[3], Rp[9];
     int ncontact = 0;
     mo->n_stick = mo->n_slip = 0;
     for (k = 0; k < m->nslot; k++) {
@@ -253,15 +290,17 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
     }
     if (h != mo->set_hash) { mo->set_hash = h; mo->t_set = d->t; }
     mo->qd_max = 0;
-    for (b = hb + 1; b < hb + m->sys_nbody[hand]; b++) {
+    for (b = hb + 1; b < hend; b++) {
         int v = m->body_dof[b];
+        if (!below(m, b, hb)) continue; /* the hand's joints only: the palm's subtree */
         double tau = fabs(d->qfrc_actuator[v] + d->qfrc_passive[v]), qd = fabs(cd_joint_qd(m, d, b));
         if (tau > mo->peak_tau) mo->peak_tau = tau;
         if (qd > mo->qd_max) mo->qd_max = qd;
     }
+    palm_frame(m, d, &mo->opt, xp, Rp);
     cd_v3_copy(c, d->body_c + 3 * ob);
-    cd_v3_sub(r, c, d->body_x + 3 * hb);
-    cd_m3_tmulv(mo->offset, d->body_R + 9 * hb, r);
+    cd_v3_sub(r, c, xp);
+    cd_m3_tmulv(mo->offset, Rp, r);
     mo->offset_norm = cd_v3_norm(r);
     /* velocity relative to the palm at the object's CoM */
     cd_v3_sub(t3, c, d->body_c + 3 * hb);
@@ -277,9 +316,9 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
         cd_m3_mulv(t, d->body_R + 9 * sb, m->shape_pos + 3 * mo->opt.feature);
         cd_v3_add(c, d->body_x + 3 * sb, t);
     }
-    mo->enclosed = enclosed(m, d, hand, c);
-    cd_v3_sub(t3, c, d->body_x + 3 * hb);
-    cd_m3_tmulv(mo->point, d->body_R + 9 * hb, t3);
+    mo->enclosed = enclosed(m, d, &mo->opt, c);
+    cd_v3_sub(t3, c, xp);
+    cd_m3_tmulv(mo->point, Rp, t3);
     if (mo->verdict != CD_VERDICT_UNRESOLVED) return;
     if (mo->offset_norm > mo->opt.workspace) {
         mo->verdict = CD_VERDICT_ESCAPED;
@@ -300,7 +339,7 @@ cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_d
     cd_grasp_contact ct[MAXC];
     cd_grasp_options op = cd_grasp_options_default();
     cd_grasp_quality q;
-    int k, n = 0, first[MAXF], nf = fingers(m, mo->opt.hand, first), f, parallel = nf >= 2, obj = mo->opt.object;
+    int k, n = 0, first[MAXF], nf = fingers(m, &mo->opt, first), f, parallel = nf >= 2, obj = mo->opt.object;
     cd_status st;
     *eps = 0;
     *closure = 0;
