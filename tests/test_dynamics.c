@@ -835,6 +835,79 @@ Test(dynamics, torque_free_body_matches_jacobi_elliptic_solution)
     cd_model_free(m);
 }
 
+/* A target tumbling about its intermediate axis (issue 10: the Dzhanibekov
+ * case). I = (100, 150, 200) kg m^2, w0 = (0.001, 0.1, 0.001) rad/s: close to
+ * the unstable axis, so w_y runs down through 0 and reverses (the body flips)
+ * once every half period T/2 = 2K(m)/lambda of the elliptic solution, while
+ * w_x and w_z stay small in between. Over 1.2 periods the body-frame angular
+ * velocity must follow the closed form within 1e-8 rad/s, E and |L| hold to
+ * 1e-10, and w_y must have changed sign at least twice, each time within
+ * 1e-3 s of the closed form's zeros (t = T/4 + k T/2). */
+typedef struct { rb_mon r; double t_prev, wy_prev, t_zero[8]; int nzero; } flip_mon;
+
+static int flip_cb(const cd_model *m, cd_data *d, void *user)
+{
+    flip_mon *f = (flip_mon *)user;
+    double wb[3];
+    cd_sys_state st = cd_state_of(m, d, 0);
+    (void)rb_cb(m, d, &f->r);
+    tmulv3(wb, d->body_R, st.angvel);
+    if (f->t_prev >= 0 && (wb[1] > 0) != (f->wy_prev > 0) && f->nzero < 8) /* linear within the step */
+        f->t_zero[f->nzero++] = f->t_prev + (d->t - f->t_prev) * f->wy_prev / (f->wy_prev - wb[1]);
+    f->t_prev = d->t;
+    f->wy_prev = wb[1];
+    return 0;
+}
+
+Test(dynamics, intermediate_axis_tumble_flips_as_the_elliptic_solution)
+{
+    const double Id[3] = {100, 150, 200}, w0[3] = {0.001, 0.1, 0.001};
+    cd_model *m = cd_model_create();
+    cd_system_desc sd = cd_system_desc_default();
+    cd_error e;
+    cd_data *d;
+    flip_mon f;
+    double T, L[3];
+    int k;
+    sd.name = "target";
+    sd.mass = 410.0;
+    diag3(sd.inertia, Id[0], Id[1], Id[2]);
+    memcpy(sd.angvel, w0, sizeof sd.angvel);
+    cr_assert(cd_model_add_system(m, &sd, &e) == 0, "%s", e.msg);
+    m->opt.rtol = 1e-12;
+    m->opt.atol = 1e-14;
+    m->opt.h_max = 0.5;
+    finalize(m);
+    d = mkdata(m);
+    memset(&f, 0, sizeof f);
+    f.t_prev = -1;
+    euler_solution(&f.r.S, Id, w0);
+    cr_assert_eq(f.r.S.b, 1, "the middle axis is y");
+    T = 4.0 * gsl_sf_ellint_Kcomp(sqrt(f.r.S.m), GSL_PREC_DOUBLE) / f.r.S.lambda;
+    cd_kinematics(m, d);
+    cd_momentum(m, d, 0, &f.r.E0, NULL, L, NULL, NULL);
+    f.r.L0 = norm3(L);
+    advance_ok(m, d, 1.2 * T, flip_cb, &f);
+    cr_log_info("intermediate axis: m = %.12f, period %.6g s; %d flips of w_y; max w error %.2e rad/s, dE %.2e, d|L| %.2e",
+                f.r.S.m, T, f.nzero, f.r.dw, f.r.dE, f.r.dL);
+    cr_expect(f.r.dw < 1e-8, "max |w_body - w_analytic| = %.3e rad/s", f.r.dw);
+    cr_expect(f.r.dE < 1e-10, "energy drift %.3e", f.r.dE);
+    cr_expect(f.r.dL < 1e-10, "|L| drift %.3e", f.r.dL);
+    cr_expect_geq(f.nzero, 2, "w_y reversed %d times in 1.2 periods", f.nzero);
+    for (k = 0; k < f.nzero; k++) {
+        /* zeros of sn(lambda t + u0): lambda t + u0 = j 2K */
+        double K = gsl_sf_ellint_Kcomp(sqrt(f.r.S.m), GSL_PREC_DOUBLE), tz = HUGE_VAL;
+        int j;
+        for (j = 0; j < 8; j++) {
+            double t = (j * 2.0 * K - f.r.S.u0) / f.r.S.lambda;
+            if (fabs(t - f.t_zero[k]) < fabs(tz - f.t_zero[k])) tz = t;
+        }
+        cr_expect_lt(fabs(f.t_zero[k] - tz), 1e-3, "flip %d at %.9g s, closed form %.9g s", k, f.t_zero[k], tz);
+    }
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
 /* ==========================================================================
  * 5. Free-floating base with a one-joint arm (planar, zero momentum)
  *
