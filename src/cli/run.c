@@ -259,79 +259,84 @@ void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_mer
     }
 }
 
-/* Dense output (simulation.sampling = "interpolate"): one cd_sim_advance over
- * the whole run; the step callback hands every accepted step to the sampler,
- * whose samples (k output_dt below the duration) go to the file and the
- * monitor; the last sample is the run's own state at the duration. */
+/* Where the samples of a run go, whichever way they are taken: the file,
+ * the monitor, the controller's figures of merit, the periodic flush. */
 typedef struct {
     run_ctx *c;
-    cd_sampler *smp;
     cd_h5_writer *w;
     cd_monitor *mon;
     const cd_scenario *sc;
-    cd_status wst;        /* the first writer failure */
+    cd_status wst;        /* the first failure of a sample (writer, or an unevaluable sample) */
     cd_error werr;
     double t_last_sample, last_flush;
     int verdict_stop;     /* stopped at the monitor's verdict (--until-verdict) */
+} sample_out;
+
+/* One sample: 0 to go on, 1 to stop (a failure in o->wst, or the verdict). */
+static int take_sample(sample_out *o, const cd_model *m, const cd_data *s)
+{
+    cd_status st = CD_OK;
+    if (o->w) st = cd_h5_append(o->w, m, s, &o->werr);
+    /* a sample with a non-finite value is kept in the file (CD_ENUMERIC) */
+    if (st == CD_OK || st == CD_ENUMERIC) o->t_last_sample = s->t;
+    if (st != CD_OK) { o->wst = st; return 1; }
+    if (o->mon) cd_monitor_update(o->mon, m, s);
+    if (o->c->ctl && o->c->merit) cd_ctrl_merit_update(o->c->merit, o->c->ctl, m, s);
+    if (o->mon && o->c->until_verdict && o->mon->verdict != CD_VERDICT_UNRESOLVED) { /* capdyn sweep --until-verdict */
+        o->verdict_stop = 1;
+        return 1;
+    }
+    if (o->w && cli_wall() - o->last_flush >= o->sc->flush_every) {
+        st = cd_h5_flush(o->w, &o->werr);
+        if (st != CD_OK) { o->wst = st; return 1; }
+        o->last_flush = cli_wall();
+    }
+    return 0;
+}
+
+/* Dense output (simulation.sampling = "interpolate"): one cd_sim_advance over
+ * the whole run; the step callback hands every accepted step to the sampler,
+ * whose samples (k output_dt below the duration) are taken; the last sample
+ * is the run's own state at the duration. */
+typedef struct {
+    sample_out *o;
+    cd_sampler *smp;
 } dense_ctx;
 
 static int dense_sample(const cd_model *m, const cd_data *s, void *user)
 {
-    dense_ctx *x = (dense_ctx *)user;
-    cd_status st = CD_OK;
-    /* the final sample is the run's own state at the duration */
-    if (s->t >= x->sc->duration * (1.0 - 1e-12)) return 0;
-    if (x->w) st = cd_h5_append(x->w, m, s, &x->werr);
-    if (st == CD_OK || st == CD_ENUMERIC) x->t_last_sample = s->t;
-    if (st != CD_OK) { x->wst = st; return 1; }
-    if (x->mon) cd_monitor_update(x->mon, m, s);
-    if (x->c->ctl && x->c->merit) cd_ctrl_merit_update(x->c->merit, x->c->ctl, m, s);
-    if (x->mon && x->c->until_verdict && x->mon->verdict != CD_VERDICT_UNRESOLVED) { x->verdict_stop = 1; return 1; }
-    if (x->w && cli_wall() - x->last_flush >= x->sc->flush_every) {
-        st = cd_h5_flush(x->w, &x->werr);
-        if (st != CD_OK) { x->wst = st; return 1; }
-        x->last_flush = cli_wall();
-    }
-    return 0;
+    sample_out *o = (sample_out *)user;
+    if (s->t >= o->sc->duration * (1.0 - 1e-12)) return 0; /* the final one is taken at the end */
+    return take_sample(o, m, s);
 }
 
 static int dense_step_cb(const cd_model *m, cd_data *d, void *user)
 {
     dense_ctx *x = (dense_ctx *)user;
-    int r = step_cb(m, d, x->c);
+    int r = step_cb(m, d, x->o->c);
     if (r) return r;
-    r = cd_sampler_update(x->smp, m, d, dense_sample, x);
+    r = cd_sampler_update(x->smp, m, d, dense_sample, x->o);
     if (r < 0) { /* a sample state that cannot be evaluated */
-        x->wst = CD_ENUMERIC;
-        snprintf(x->werr.msg, sizeof x->werr.msg, "an interpolated sample after t = %.9g s cannot be evaluated", d->t);
+        x->o->wst = CD_ENUMERIC;
+        snprintf(x->o->werr.msg, sizeof x->o->werr.msg, "an interpolated sample after t = %.9g s cannot be evaluated", d->t);
         return 1;
     }
     return r;
 }
 
-static cd_status dense_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_monitor *mon, run_ctx *c,
-                            cd_error *err, double *t_last_sample)
+static cd_status dense_loop(const cd_scenario *sc, cd_data *d, sample_out *o, cd_error *err)
 {
     const cd_model *m = sc->model;
     dense_ctx x;
     cd_status st;
-    memset(&x, 0, sizeof x);
-    x.c = c; x.w = w; x.mon = mon; x.sc = sc;
-    x.t_last_sample = *t_last_sample;
-    x.last_flush = cli_wall();
+    x.o = o;
     x.smp = cd_sampler_create(m, err);
     if (!x.smp) return err->status;
     st = cd_sampler_begin(x.smp, m, d, 0.0, sc->output_dt, err); /* k output_dt, as the stopping loop */
     if (st == CD_OK) st = cd_sim_advance(m, d, sc->duration, dense_step_cb, &x, err);
-    if (x.wst != CD_OK) { st = x.wst; *err = x.werr; }
-    else if (x.verdict_stop && st == CD_EINTERRUPT) st = CD_OK;
-    else if (st == CD_OK) { /* the last sample: the state at the duration */
-        if (w) st = cd_h5_append(w, m, d, err);
-        if (st == CD_OK || st == CD_ENUMERIC) x.t_last_sample = d->t;
-        if (st == CD_OK && mon) cd_monitor_update(mon, m, d);
-        if (st == CD_OK && c->ctl && c->merit) cd_ctrl_merit_update(c->merit, c->ctl, m, d);
-    }
-    *t_last_sample = x.t_last_sample;
+    if (o->verdict_stop && st == CD_EINTERRUPT) st = CD_OK;
+    else if (st == CD_OK && o->wst == CD_OK) (void)take_sample(o, m, d); /* the last sample: the state at the duration */
+    if (o->wst != CD_OK) { st = o->wst; *err = o->werr; }
     cd_sampler_free(x.smp);
     return st;
 }
@@ -344,7 +349,8 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     cd_error err, werr;
     cd_status st = CD_OK;
     long i, nout;
-    double last_flush, t_last_sample, ratio = sc->duration / sc->output_dt;
+    double ratio = sc->duration / sc->output_dt;
+    sample_out o;
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
     (void)step_cb(m, d, c);
     if (c->ctl && c->merit) cd_ctrl_merit_init(c->merit, c->ctl, m, d); /* docs/capture.md */
@@ -356,12 +362,14 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     if (st != CD_OK) err = werr;
     /* a signal that came while the file was being created */
     if (st == CD_OK && g_signal) st = CD_EINTERRUPT;
-    t_last_sample = d->t;
-    last_flush = cli_wall();
+    memset(&o, 0, sizeof o);
+    o.c = c; o.w = w; o.mon = mon; o.sc = sc;
+    o.t_last_sample = d->t;
+    o.last_flush = cli_wall();
     /* samples at k output_dt; the last one exactly at the duration */
     nout = (long)ceil(ratio - 1e-9);
     if (st == CD_OK && sc->interpolate) {
-        st = dense_loop(sc, d, w, mon, c, &err, &t_last_sample);
+        st = dense_loop(sc, d, &o, &err);
         nout = 0;
     }
     for (i = 1; st == CD_OK && i <= nout; i++) {
@@ -369,17 +377,9 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
         if (tn > sc->duration) tn = sc->duration;
         st = cd_sim_advance(m, d, tn, step_cb, c, &err);
         if (st != CD_OK) break;
-        if (w) st = cd_h5_append(w, m, d, &werr);
-        /* a sample with a non-finite value is kept in the file (CD_ENUMERIC) */
-        if (st == CD_OK || st == CD_ENUMERIC) t_last_sample = d->t;
-        if (st != CD_OK) { err = werr; break; }
-        if (mon) cd_monitor_update(mon, m, d);
-        if (c->ctl && c->merit) cd_ctrl_merit_update(c->merit, c->ctl, m, d);
-        if (mon && c->until_verdict && mon->verdict != CD_VERDICT_UNRESOLVED) break; /* capdyn sweep --until-verdict */
-        if (w && cli_wall() - last_flush >= sc->flush_every) {
-            st = cd_h5_flush(w, &werr);
-            if (st != CD_OK) { err = werr; break; }
-            last_flush = cli_wall();
+        if (take_sample(&o, m, d)) {
+            if (o.wst != CD_OK) { st = o.wst; err = o.werr; }
+            break;
         }
         if (g_signal) { st = CD_EINTERRUPT; break; }
     }
@@ -390,7 +390,7 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     clear_progress(c);
 
     /* keep the last good state of a failed or interrupted run */
-    if (w && st != CD_OK && st != CD_EIO && d->t > t_last_sample) (void)cd_h5_append(w, m, d, &werr);
+    if (w && st != CD_OK && st != CD_EIO && d->t > o.t_last_sample) (void)cd_h5_append(w, m, d, &werr);
     *errp = err;
     return st;
 }

@@ -26,10 +26,11 @@
  * Stages (increments k_i include h; gamma the diagonal):
  *   (I - h gamma J) k_i = h f(t + a_i h, y + sum_j alpha_ij k_j) + h J sum_j gamma_ij k_j
  *   y1 = y + sum b_i k_i,   error = sum (b_i - bhat_i) k_i.
- * f(t, y) comes from the driver (can_use_dydt_in), so a step costs 3 new
- * evaluations plus the Jacobian when it is renewed. dydt_out, used by GSL's
- * standard control only to scale the tolerance (a_dydt h |y'|), is the last
- * stage's derivative, taken at t + h on the stiffly accurate stage point. */
+ * f(t, y) comes from the driver (can_use_dydt_in). dydt_out must be the
+ * exact f(t + h, y1): GSL's evolve hands it back as the next step's dydt_in
+ * (whatever gives_exact_dydt_out says), and the standard control scales the
+ * tolerance with it. A step so costs 4 evaluations (3 stages and the end),
+ * plus the Jacobian when it is renewed. */
 #include "rosw.h"
 #include "../math/cd_math.h"
 
@@ -146,6 +147,17 @@ static int factor(cd_rosw *w, double h)
     return GSL_SUCCESS;
 }
 
+/* r <- (I - h gamma J)^-1 r on the active set (the LU of factor) */
+static int solve_active(cd_rosw *w, double *r)
+{
+    gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)w->na, (size_t)w->na);
+    gsl_vector_view v = gsl_vector_view_array(r, (size_t)w->na);
+    gsl_permutation P;
+    P.size = (size_t)w->na;
+    P.data = w->perm;
+    return gsl_linalg_LU_svx(&W.matrix, &P, &v.vector) == GSL_SUCCESS ? GSL_SUCCESS : GSL_FAILURE;
+}
+
 typedef struct {
     cd_rosw *w;
     int locator;
@@ -211,11 +223,6 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         }
         for (c = 0; c < n; c++) k[c] = h * F[c];
         if (na) {
-            gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
-            gsl_vector_view r = gsl_vector_view_array(w->r, (size_t)na);
-            gsl_permutation P;
-            P.size = (size_t)na;
-            P.data = w->perm;
             for (a = 0; a < na; a++) {
                 double acc = k[w->act[a]];
                 if (i > 0) {
@@ -226,7 +233,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
                 }
                 w->r[a] = acc;
             }
-            if (gsl_linalg_LU_svx(&W.matrix, &P, &r.vector) != GSL_SUCCESS) return GSL_FAILURE;
+            if (solve_active(w, w->r) != GSL_SUCCESS) return GSL_FAILURE;
             for (a = 0; a < na; a++) k[w->act[a]] = w->r[a];
         }
         for (c = 0; c < n; c++)
@@ -243,13 +250,8 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
     }
     if (na) { /* the error estimate filtered by (I - h gamma J)^-1: stiff components, which
                * the L-stable solution damps but the embedded one does not, do not count */
-        gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
-        gsl_vector_view r = gsl_vector_view_array(w->r, (size_t)na);
-        gsl_permutation P;
-        P.size = (size_t)na;
-        P.data = w->perm;
         for (a = 0; a < na; a++) w->r[a] = yerr[w->act[a]];
-        if (gsl_linalg_LU_svx(&W.matrix, &P, &r.vector) != GSL_SUCCESS) return GSL_FAILURE;
+        if (solve_active(w, w->r) != GSL_SUCCESS) return GSL_FAILURE;
         for (a = 0; a < na; a++) yerr[w->act[a]] = w->r[a];
     }
     if (dydt_out && GSL_ODEIV_FN_EVAL(sys, t + h, y, dydt_out) != GSL_SUCCESS) return GSL_EBADFUNC;
