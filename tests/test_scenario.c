@@ -801,6 +801,20 @@ Test(scenario_override, set_by_name_index_and_new_keys)
     cd_scenario_free(sc);
 }
 
+Test(scenario_override, vector_components_and_the_only_element)
+{
+    /* minimal.toml has one [[system]] ("ball"): system.position is
+     * system[0].position; .x .y .z are [0] [1] [2] of a number array */
+    const char *ov[] = {"system.position=[1, 2, 3]", "system.position.y=5", "system.ball.position.z=-4"};
+    const char *bad[] = {"system.position=[1, 2, 3]", "system.position.w=1"};
+    cd_scenario *sc = load_ok("minimal.toml", ov, 3);
+    double p[3] = {1, 5, -4};
+    near_n(sc->model->sys_pos0, p, 3, 0.0, "position after .y and .z");
+    cd_scenario_free(sc);
+    expect_fail_ov("minimal.toml", bad, 2, CD_EINVAL,
+                   SUBS("--set 'system.position.w=1': key 'system[0].position': no component 'w' (expected x, y, z"));
+}
+
 Test(scenario_override, later_override_wins)
 {
     const char *ov[] = {"simulation.duration=5", "simulation.duration=7"};

@@ -775,6 +775,15 @@ void apply_override(NodeP &root, const std::string &ov)
             }
             slot = &e->val;
             shown = join(shown, s.id);
+        } else if (cur.kind == NK::Array && (s.id == "x" || s.id == "y" || s.id == "z") && !cur.arr.empty() &&
+                   (cur.arr[0]->kind == NK::Float || cur.arr[0]->kind == NK::Int)) {
+            /* a vector's component by name: position.x is position[0] */
+            size_t c = (size_t)(s.id[0] - 'x');
+            if (c >= cur.arr.size())
+                fail_at(L, shown, "no component '" + s.id + "': the value has " + std::to_string(cur.arr.size()) +
+                                      " elements");
+            slot = &cur.arr[c];
+            shown = idx(shown, c);
         } else if (cur.kind == NK::Array) {
             /* select an element of an array of tables by its name */
             std::vector<std::string> names;
@@ -786,7 +795,19 @@ void apply_override(NodeP &root, const std::string &ov)
                 names.push_back(*n);
                 if (*n == s.id && !hit) { hit = &cur.arr[j]; hit_i = j; }
             }
+            if (!hit && cur.arr.size() == 1 && cur.arr[0]->kind == NK::Table &&
+                (cur.arr[0]->find(s.id) || closest(s.id, names).empty())) {
+                /* the only element of the array, left implicit: target.position
+                 * is target[0].position when there is one [[target]] (not when
+                 * the word looks like a misspelt name of that element) */
+                slot = &cur.arr[0];
+                shown = idx(shown, 0);
+                k--;
+                continue;
+            }
             if (!hit) {
+                if (names.empty() && !cur.arr.empty() && (cur.arr[0]->kind == NK::Float || cur.arr[0]->kind == NK::Int))
+                    fail_at(L, shown, "no component '" + s.id + "' (expected x, y, z or an index [N])");
                 if (names.empty())
                     fail_at(L, shown, "no element named '" + s.id + "' (the elements have no names; use an index [N])");
                 fail_at(L, shown, "no element named '" + s.id + "'" + hint(s.id, names));
