@@ -1061,6 +1061,39 @@ Test(cli, interpolated_samples_match_stopped_ones_on_the_same_grid)
     rm_rf(dir);
 }
 
+Test(cli, jacobian_count_is_recorded_for_the_stiff_stepper_only)
+{
+    /* stats_njac: ros34pw2 forms at least one Jacobian, each costing one
+     * evaluation per active unknown (at least the block's 13 coordinates and
+     * velocities), all counted in stats_nrhs; rk8pd forms none. */
+    char dir[64], sc[512], h5[256], *err = NULL;
+    const char *stp[2] = {"simulation.integrator=ros34pw2", "simulation.integrator=rk8pd"};
+    int k, rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "block_on_slope.toml");
+    for (k = 0; k < 2; k++) {
+        hid_t f;
+        long long nj, nf;
+        snprintf(h5, sizeof h5, "%s/j%d.h5", dir, k);
+        rc = capdyn(dir, NULL, &err, "run", sc, "-o", h5, "--quiet", "--set", "simulation.duration=0.5", "--set", stp[k],
+                    (char *)NULL);
+        cr_assert_eq(rc, 0, "exit %d: %s", rc, err);
+        free(err);
+        f = open_ro(h5);
+        cr_assert(f >= 0);
+        nj = attr_ll(f, "stats_njac");
+        nf = attr_ll(f, "stats_nrhs");
+        H5Fclose(f);
+        if (k == 0) {
+            cr_expect_geq(nj, 1, "ros34pw2: %lld Jacobians", nj);
+            cr_expect_geq(nf, 13 * nj, "ros34pw2: %lld evaluations for %lld Jacobians", nf, nj);
+        } else {
+            cr_expect_eq(nj, 0, "rk8pd: %lld Jacobians", nj);
+        }
+    }
+    rm_rf(dir);
+}
+
 Test(cli, uncompressed_results_hold_the_same_samples)
 {
     /* simulation.compress = false (issue 11: HDF5 compression optional): the

@@ -235,7 +235,7 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
 
     /* integrator */
     {
-        long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0;
+        long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0, nj = 0;
         double rtol = 0, atol = 0, hmin = 0, hmax = 0;
         /* the closing statistics exist from the start (placeholders): final
          * once the run wrote its status */
@@ -249,12 +249,17 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
             cd_h5r_attr_i64(r, "/", "stats_nlocate_steps", &nl);
             cd_h5r_attr_i64(r, "/", "stats_nwarn_dwell", &nd);
             cd_h5r_attr_i64(r, "/", "stats_nwarn_geom", &ng);
+            cd_h5r_attr_i64(r, "/", "stats_njac", &nj); /* absent from files before it existed: stays 0 */
             cd_h5r_attr_f64(r, "/", "stats_h_min", &hmin);
             cd_h5r_attr_f64(r, "/", "stats_h_max", &hmax);
             snprintf(line, sizeof line,
                      "%s, rtol %g, atol %g: %lld steps (%lld rejected), %lld rhs evaluations, %lld event-locating "
                      "steps; step %.3g .. %.3g s",
                      stepper ? stepper : "?", rtol, atol, ns, nr, nf, nl, hmin, hmax);
+            if (nj > 0) {
+                size_t len = strlen(line);
+                snprintf(line + len, sizeof line - len, "; %lld Jacobians (finite differences, in the evaluations)", nj);
+            }
         } else if (n > 0) {
             double *a = cd_h5r_series(r, "/diagnostics/nsteps", NULL, &err);
             double *bb = cd_h5r_series(r, "/diagnostics/nrejected", NULL, &err);
