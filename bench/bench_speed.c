@@ -8,6 +8,13 @@
  *               accuracy: object offset over the hold and creep rate
  *       incline bench/incline.toml and bench/mjcf/incline.xml, 10 s;
  *               accuracy: drift along the slope between t = 1 s and 10 s
+ *       capture bench/capture_twin.toml and bench/mjcf/capture.xml: a
+ *               free-floating chaser (arm held by joint PD torques) and a
+ *               tumbling target drifting into its gripper, which closes at
+ *               0.5 s; 4 s; accuracy: the bar's offset from the palm at the
+ *               end, its speed relative to the palm over the last 0.5 s,
+ *               whether it is held, and the drift of the whole system's
+ *               linear and angular momentum (no external force)
  *     Table: wall time per simulated second, real-time factor (RTF),
  *     capdyn RTF / MuJoCo RTF per repetition (min, median), steps, rhs
  *     evaluations (MuJoCo: one mj_forward per mj_step), peak RSS and heap.
@@ -19,6 +26,7 @@
  *
  * capdyn is driven only through its public headers (include/capdyn/ headers).
  * Usage: bench_speed [-r reps] [-o results.txt] [--hold S] [--fd-only] [--scenes-only]
+ *                    [--scene grasp|incline|capture] (repeatable: only those scenes)
  * (run from the repository root). */
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
@@ -98,10 +106,41 @@ static long heap_bytes(void)
 
 /* ---- scenes ------------------------------------------------------------- */
 enum { ENG_CAPDYN = 0, ENG_MUJOCO = 1 };
-enum { SC_GRASP = 0, SC_INCLINE = 1, NSCENE = 2 };
-static const char *scene_name[NSCENE] = {"grasp", "incline"};
+enum { SC_GRASP = 0, SC_INCLINE = 1, SC_CAPTURE = 2, NSCENE = 3 };
+static const char *scene_name[NSCENE] = {"grasp", "incline", "capture"};
+static const char *scene_toml[NSCENE] = {"scenarios/paper_fig5_envelope_grasp.toml", "bench/incline.toml",
+                                         "bench/capture_twin.toml"};
+static const char *scene_xml[NSCENE] = {"bench/mjcf/fig5_grasp.xml", "bench/mjcf/incline.xml", "bench/mjcf/capture.xml"};
+/* the system (capdyn) / body (MuJoCo) whose position the accuracy figure follows */
+static const char *scene_body[NSCENE] = {"object", "block", "target"};
 static const double T_CLOSE = 2.0, T_INCLINE = 10.0, T_SETTLE = 1.0;
 static double T_HOLD = 10.0; /* --hold S */
+
+/* capture scene: the fingers close at CAP_CLOSE; the run ends at CAP_END; the
+ * relative speed is measured over [CAP_LAST, CAP_END]. Finger torques from
+ * CAP_CLOSE (MuJoCo's ctrl; the twin check compares them with the TOML's
+ * "steps" tables), the bar's centre in the target's frame and the palm face's
+ * centre in the wrist_roll frame (bench/capture_twin.toml). */
+static const double CAP_CLOSE = 0.5, CAP_LAST = 3.5, CAP_END = 4.0;
+static const char *cap_finger[4] = {"left1", "left2", "right1", "right2"};
+static const double cap_tau[4] = {0.4, 0.1, 0.4, 0.1};
+static const char *cap_arm[6] = {"shoulder_yaw", "upper_arm", "forearm", "wrist_pitch", "wrist_yaw", "wrist_roll"};
+static const double cap_bar[3] = {-0.95, 0.0, 0.0}, cap_palm[3] = {0.14, 0.0, 0.0};
+/* held: the bar's centre between the finger bases (|y| < 0.05 m), within the
+ * fingers' length of the palm face (x < 0.15 m) and the bar still across the
+ * fingers' plane (|z| < its half length 0.15 m), palm frame */
+static int cap_held(const double r[3]) { return fabs(r[1]) < 0.05 && r[0] < 0.15 && fabs(r[2]) < 0.15; }
+
+/* scene times: [0] end of the first segment (grasp: closing; incline:
+ * settling; capture: the fingers close), [1] start of the span of the rate,
+ * [2] end */
+static void scene_times(int scene, double t[3])
+{
+    if (scene == SC_CAPTURE) { t[0] = CAP_CLOSE; t[1] = CAP_LAST; t[2] = CAP_END; return; }
+    t[0] = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
+    t[2] = scene == SC_GRASP ? T_CLOSE + T_HOLD : T_INCLINE;
+    t[1] = 0.5 * (t[0] + t[2]);
+}
 
 /* what a child reports back through its pipe */
 typedef struct {
@@ -113,7 +152,11 @@ typedef struct {
     long hwm_kb;      /* peak resident memory of the run's process (VmHWM) [kB] */
     double acc;       /* grasp: object offset over the hold; incline: drift [m] */
     double rate;      /* the same over the second half of that span, per second [m/s] */
-    double pos[3];    /* final object / block position [m] */
+    double pos[3];    /* final object / block / target position [m] */
+    /* capture scene */
+    double rel[3];    /* the bar's centre relative to the palm face's centre at the end, palm frame [m] */
+    double P0, L0;    /* |linear momentum|, |angular momentum about the common CoM| at t = 0 */
+    double dP, dL;    /* their change from t = 0 to the end, |.|, largest of the segment ends */
     char msg[1100];
 } run_result;
 
@@ -128,6 +171,84 @@ static double dist3(const double a[3], const double b[3])
 {
     double dx = a[0] - b[0], dy = a[1] - b[1], dz = a[2] - b[2];
     return sqrt(dx * dx + dy * dy + dz * dz);
+}
+
+/* R^T (p - o), R a row-major rotation body -> world, o the body origin: world point p in the body frame;
+ * from_frame: the reverse, body point p in the world */
+static void to_frame(const double *R, const double o[3], const double p[3], double r[3])
+{
+    int i;
+    for (i = 0; i < 3; i++)
+        r[i] = R[i] * (p[0] - o[0]) + R[3 + i] * (p[1] - o[1]) + R[6 + i] * (p[2] - o[2]);
+}
+static void from_frame(const double *R, const double o[3], const double p[3], double w[3])
+{
+    int i;
+    for (i = 0; i < 3; i++) w[i] = o[i] + R[3 * i] * p[0] + R[3 * i + 1] * p[1] + R[3 * i + 2] * p[2];
+}
+static double norm3(const double a[3]) { return sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]); }
+
+/* capture scene, capdyn: the bar's centre relative to the palm face's
+ * centre (palm frame) and the whole model's linear momentum and angular
+ * momentum about the common CoM */
+static void capdyn_capture_measure(const cd_model *m, cd_data *d, double rel[3], double P[3], double L[3])
+{
+    int palm = cd_model_body_id(m, "chaser/wrist_roll"), tgt = cd_model_body_id(m, "target"), s, k;
+    double bar[3], pw[3], mc[3] = {0, 0, 0}, mt = 0;
+    cd_kinematics(m, d);
+    from_frame(d->body_R + 9 * tgt, d->body_x + 3 * tgt, cap_bar, bar);
+    to_frame(d->body_R + 9 * palm, d->body_x + 3 * palm, bar, pw);
+    for (k = 0; k < 3; k++) { rel[k] = pw[k] - cap_palm[k]; P[k] = L[k] = 0; }
+    for (s = 0; s < m->nsys; s++) {
+        double ps[3], lo[3], c[3], ms = 0;
+        int b;
+        cd_momentum(m, d, s, NULL, ps, NULL, lo, c);
+        for (b = 0; b < m->nbody; b++)
+            if (m->body_sys[b] == s) ms += m->body_mass[b];
+        for (k = 0; k < 3; k++) { P[k] += ps[k]; L[k] += lo[k]; mc[k] += ms * c[k]; }
+        mt += ms;
+    }
+    /* about the common CoM c: L_c = L_origin - c x P */
+    for (k = 0; k < 3; k++) mc[k] /= mt;
+    L[0] -= mc[1] * P[2] - mc[2] * P[1];
+    L[1] -= mc[2] * P[0] - mc[0] * P[2];
+    L[2] -= mc[0] * P[1] - mc[1] * P[0];
+}
+
+/* the same for MuJoCo (after mj_forward: world body 0's subtree is the whole
+ * model; subtree_angmom is about the subtree's CoM) */
+static void mujoco_capture_measure(const mjModel *m, mjData *d, double rel[3], double P[3], double L[3])
+{
+    int palm = mj_name2id(m, mjOBJ_BODY, "wrist_roll"), tgt = mj_name2id(m, mjOBJ_BODY, "target"), k;
+    double bar[3], pw[3];
+    mj_forward(m, d);
+    mj_subtreeVel(m, d);
+    from_frame(d->xmat + 9 * tgt, d->xpos + 3 * tgt, cap_bar, bar);
+    to_frame(d->xmat + 9 * palm, d->xpos + 3 * palm, bar, pw);
+    for (k = 0; k < 3; k++) {
+        rel[k] = pw[k] - cap_palm[k];
+        P[k] = m->body_subtreemass[0] * d->subtree_linvel[k];
+        L[k] = d->subtree_angmom[k];
+    }
+}
+
+/* the capture figures from the measurements at t = 0 and the segment ends */
+static void capture_figures(run_result *r, double P[4][3], double L[4][3], double rel[4][3],
+                            const double tseg[3])
+{
+    int k;
+    r->P0 = norm3(P[0]);
+    r->L0 = norm3(L[0]);
+    r->dP = r->dL = 0;
+    for (k = 1; k < 4; k++) {
+        double dp[3] = {P[k][0] - P[0][0], P[k][1] - P[0][1], P[k][2] - P[0][2]};
+        double dl[3] = {L[k][0] - L[0][0], L[k][1] - L[0][1], L[k][2] - L[0][2]};
+        r->dP = fmax(r->dP, norm3(dp));
+        r->dL = fmax(r->dL, norm3(dl));
+    }
+    memcpy(r->rel, rel[3], sizeof r->rel);
+    r->acc = norm3(rel[3]);
+    r->rate = dist3(rel[3], rel[2]) / (tseg[2] - tseg[1]);
 }
 
 /* Extra scenario overrides for both capdyn scenes from the environment:
@@ -149,29 +270,28 @@ static void run_capdyn(int scene, run_result *r)
     const char *ovr[8];
     char ovbuf[1024];
     int nov = 0;
-    const char *path = scene == SC_GRASP ? "scenarios/paper_fig5_envelope_grasp.toml" : "bench/incline.toml";
     cd_error e;
     long h0 = heap_bytes();
     cd_scenario *sc;
-    if (scene == SC_GRASP) ovr[nov++] = "simulation.rtol=1e-6";
-    nov = bench_overrides(ovr, nov, ovbuf, sizeof ovbuf);
-    sc = cd_scenario_load(path, ovr, nov, &e);
     cd_data *d;
     int s;
-    double t0, tmid = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
-    double tend = scene == SC_GRASP ? T_CLOSE + T_HOLD : T_INCLINE;
+    double t0, tseg[3];
     cd_status st;
+    scene_times(scene, tseg);
+    if (scene == SC_GRASP) ovr[nov++] = "simulation.rtol=1e-6";
+    nov = bench_overrides(ovr, nov, ovbuf, sizeof ovbuf);
+    sc = cd_scenario_load(scene_toml[scene], ovr, nov, &e);
     if (!sc) { snprintf(r->msg, sizeof r->msg, "%s", e.msg); return; }
     d = cd_data_create(sc->model, sc->event_capacity, &e);
     if (!d) { snprintf(r->msg, sizeof r->msg, "%s", e.msg); cd_scenario_free(sc); return; }
     r->heap = heap_bytes() - h0;
-    s = cd_model_system_id(sc->model, scene == SC_GRASP ? "object" : "block");
+    s = cd_model_system_id(sc->model, scene_body[scene]);
     {
-        /* three segments: to tmid, to the middle of the span, to the end;
-         * only the cd_sim_advance calls are timed */
-        double tseg[3], p[3][3];
+        /* three segments: to tseg[0], to tseg[1], to the end; only the
+         * cd_sim_advance calls are timed */
+        double p[3][3], P[4][3], L[4][3], rel[4][3];
         int k;
-        tseg[0] = tmid; tseg[1] = 0.5 * (tmid + tend); tseg[2] = tend;
+        if (scene == SC_CAPTURE) capdyn_capture_measure(sc->model, d, rel[0], P[0], L[0]);
         r->wall = 0;
         st = CD_OK;
         for (k = 0; k < 3 && st == CD_OK; k++) {
@@ -179,17 +299,19 @@ static void run_capdyn(int scene, run_result *r)
             st = cd_sim_advance(sc->model, d, tseg[k], NULL, NULL, &e);
             r->wall += now() - t0;
             capdyn_pos(sc->model, d, s, p[k]);
+            if (scene == SC_CAPTURE && st == CD_OK) capdyn_capture_measure(sc->model, d, rel[k + 1], P[k + 1], L[k + 1]);
         }
         if (st != CD_OK) {
             snprintf(r->msg, sizeof r->msg, "%s", e.msg);
         } else {
             r->ok = 1;
-            r->tsim = tend;
+            r->tsim = tseg[2];
             r->steps = d->stats.nsteps;
             r->nrhs = d->stats.nrhs;
             memcpy(r->pos, p[2], sizeof r->pos);
             r->acc = dist3(p[2], p[0]);
             r->rate = dist3(p[2], p[1]) / (tseg[2] - tseg[1]);
+            if (scene == SC_CAPTURE) capture_figures(r, P, L, rel, tseg);
         }
     }
     cd_data_free(d);
@@ -198,27 +320,28 @@ static void run_capdyn(int scene, run_result *r)
 
 static void run_mujoco(int scene, run_result *r)
 {
-    const char *path = scene == SC_GRASP ? "bench/mjcf/fig5_grasp.xml" : "bench/mjcf/incline.xml";
+    const char *path = scene_xml[scene];
     char err[1000] = "";
     long h0 = heap_bytes();
     mjModel *m = mj_loadXML(path, NULL, err, (int)sizeof err);
     mjData *d;
     int body, nstep, k;
-    double t0, tmid = scene == SC_GRASP ? T_CLOSE : T_SETTLE;
-    double tend = scene == SC_GRASP ? T_CLOSE + T_HOLD : T_INCLINE;
+    double t0, tseg[3];
+    scene_times(scene, tseg);
     if (!m) { snprintf(r->msg, sizeof r->msg, "%s: %s", path, err); return; }
     d = mj_makeData(m);
     r->heap = heap_bytes() - h0;
-    body = mj_name2id(m, mjOBJ_BODY, scene == SC_GRASP ? "object" : "block");
+    if (m->nkey > 0) mj_resetDataKeyframe(m, d, 0); /* the initial state (capture: the target's velocity) */
+    body = mj_name2id(m, mjOBJ_BODY, scene_body[scene]);
     if (scene == SC_GRASP) {
         static const char *jn[4] = {"left1", "left2", "right1", "right2"};
         static const double tau[4] = {0.2, 0.1, 0.2, 0.1};
         for (k = 0; k < 4; k++) d->qfrc_applied[m->jnt_dofadr[mj_name2id(m, mjOBJ_JOINT, jn[k])]] = tau[k];
     }
     {
-        double tseg[3], p[3][3];
+        double p[3][3], P[4][3], L[4][3], rel[4][3];
         int seg;
-        tseg[0] = tmid; tseg[1] = 0.5 * (tmid + tend); tseg[2] = tend;
+        if (scene == SC_CAPTURE) mujoco_capture_measure(m, d, rel[0], P[0], L[0]);
         r->wall = 0;
         for (seg = 0; seg < 3; seg++) {
             nstep = (int)lround((tseg[seg] - d->time) / m->opt.timestep);
@@ -226,6 +349,11 @@ static void run_mujoco(int scene, run_result *r)
             for (k = 0; k < nstep; k++) mj_step(m, d);
             r->wall += now() - t0;
             memcpy(p[seg], d->xpos + 3 * body, sizeof p[seg]);
+            if (scene == SC_CAPTURE) {
+                mujoco_capture_measure(m, d, rel[seg + 1], P[seg + 1], L[seg + 1]);
+                if (seg == 0) /* the fingers close from CAP_CLOSE */
+                    for (k = 0; k < 4; k++) d->ctrl[mj_name2id(m, mjOBJ_ACTUATOR, cap_finger[k])] = cap_tau[k];
+            }
         }
         r->ok = 1;
         r->tsim = d->time;
@@ -234,6 +362,7 @@ static void run_mujoco(int scene, run_result *r)
         memcpy(r->pos, p[2], sizeof r->pos);
         r->acc = dist3(p[2], p[0]);
         r->rate = dist3(p[2], p[1]) / (tseg[2] - tseg[1]);
+        if (scene == SC_CAPTURE) capture_figures(r, P, L, rel, tseg);
     }
     mj_deleteData(d);
     mj_deleteModel(m);
@@ -313,14 +442,18 @@ static int twin_check(int scene)
     static const char *grasp_cd[] = {"hand/left1", "hand/left2", "hand/right1", "hand/right2", "object"};
     static const char *grasp_mj[] = {"left1", "left2", "right1", "right2", "object"};
     static const char *inc_cd[] = {"block"}, *inc_mj[] = {"block"};
-    const char *path = scene == SC_GRASP ? "scenarios/paper_fig5_envelope_grasp.toml" : "bench/incline.toml";
-    const char *xml = scene == SC_GRASP ? "bench/mjcf/fig5_grasp.xml" : "bench/mjcf/incline.xml";
-    const char **ncd = scene == SC_GRASP ? grasp_cd : inc_cd, **nmj = scene == SC_GRASP ? grasp_mj : inc_mj;
-    int n = scene == SC_GRASP ? 5 : 1, i, k, bad = 0;
-    char err[1000] = "";
+    static const char *cap_cd[] = {"chaser", "chaser/shoulder_yaw", "chaser/upper_arm", "chaser/forearm",
+                                   "chaser/wrist_pitch", "chaser/wrist_yaw", "chaser/wrist_roll", "chaser/left1",
+                                   "chaser/left2", "chaser/right1", "chaser/right2", "target"};
+    static const char *cap_mj[] = {"chaser", "shoulder_yaw", "upper_arm", "forearm", "wrist_pitch", "wrist_yaw",
+                                   "wrist_roll", "left1", "left2", "right1", "right2", "target"};
+    const char **ncd = scene == SC_GRASP ? grasp_cd : scene == SC_INCLINE ? inc_cd : cap_cd;
+    const char **nmj = scene == SC_GRASP ? grasp_mj : scene == SC_INCLINE ? inc_mj : cap_mj;
+    int n = scene == SC_GRASP ? 5 : scene == SC_INCLINE ? 1 : 12, i, k, bad = 0;
+    char err[1000] = "", extra[200] = "";
     cd_error e;
-    cd_scenario *sc = cd_scenario_load(path, NULL, 0, &e);
-    mjModel *mm = mj_loadXML(xml, NULL, err, (int)sizeof err);
+    cd_scenario *sc = cd_scenario_load(scene_toml[scene], NULL, 0, &e);
+    mjModel *mm = mj_loadXML(scene_xml[scene], NULL, err, (int)sizeof err);
     double worst = 0;
     if (!sc || !mm) {
         fprintf(stderr, "bench_speed: twin check: %s\n", sc ? err : e.msg);
@@ -339,13 +472,81 @@ static int twin_check(int scene)
         for (k = 0; k < 3; k++) worst = fmax(worst, fabs(ic[k] - im[k]) / ic[k]);
     }
     for (k = 0; k < 3; k++) worst = fmax(worst, fabs(sc->model->gravity[k] - mm->opt.gravity[k]) / 9.81);
+    if (scene == SC_CAPTURE) {
+        /* the arm's PD gains (capdyn "pd" actuators, MuJoCo affine bias
+         * -kp q - kd qdot) and the finger torques (capdyn "steps" tables:
+         * 0, then cap_tau from CAP_CLOSE; MuJoCo: ctrl set by this program) */
+        const cd_model *cm = sc->model;
+        double wg = 0;
+        char an[64];
+        for (i = 0; i < 6; i++) {
+            int a, am;
+            snprintf(an, sizeof an, "chaser/%s", cap_arm[i]); /* a link actuator is named system/link */
+            a = cd_model_actuator_id(cm, an);
+            am = mj_name2id(mm, mjOBJ_ACTUATOR, cap_arm[i]);
+            if (a < 0 || am < 0 || cm->act_type[a] != CD_ACT_PD) {
+                fprintf(stderr, "bench_speed: twin check: no PD actuator %s\n", cap_arm[i]);
+                bad = 1;
+                continue;
+            }
+            wg = fmax(wg, fabs(cm->act_prm[4 * a + 1] + mm->actuator_biasprm[mjNBIAS * am + 1]) / cm->act_prm[4 * a + 1]);
+            wg = fmax(wg, fabs(cm->act_prm[4 * a + 2] + mm->actuator_biasprm[mjNBIAS * am + 2]) / cm->act_prm[4 * a + 2]);
+            wg = fmax(wg, fabs(cm->act_prm[4 * a + 3]) + fabs(cm->act_prm[4 * a]) + fabs(mm->actuator_biasprm[mjNBIAS * am]));
+        }
+        for (i = 0; i < 4; i++) {
+            int a;
+            const double *tt, *tv;
+            snprintf(an, sizeof an, "chaser/%s", cap_finger[i]);
+            a = cd_model_actuator_id(cm, an);
+            if (a < 0 || cm->act_type[a] != CD_ACT_STEPS || cm->act_tbl_n[a] != 2 || mj_name2id(mm, mjOBJ_ACTUATOR, cap_finger[i]) < 0) {
+                fprintf(stderr, "bench_speed: twin check: finger %s: expected a 2-row \"steps\" actuator and a MuJoCo motor\n",
+                        cap_finger[i]);
+                bad = 1;
+                continue;
+            }
+            tt = cm->tbl_t + cm->act_tbl_adr[a];
+            tv = cm->tbl_v + cm->act_tbl_adr[a];
+            wg = fmax(wg, fabs(tv[0]) + fabs(tt[1] - CAP_CLOSE) + fabs(tv[1] - cap_tau[i]) / cap_tau[i]);
+        }
+        /* the initial state: every body's CoM in the world, the bar's
+         * offset from the palm, the momenta */
+        {
+            cd_data *cd = cd_data_create(cm, sc->event_capacity, &e);
+            mjData *md = mj_makeData(mm);
+            double rc[3], rm[3], Pc[3], Pm[3], Lc[3], Lm[3], wx = 0, wm = 0;
+            if (!cd) { fprintf(stderr, "bench_speed: twin check: %s\n", e.msg); bad = 1; }
+            else {
+                if (mm->nkey > 0) mj_resetDataKeyframe(mm, md, 0);
+                capdyn_capture_measure(cm, cd, rc, Pc, Lc);
+                mujoco_capture_measure(mm, md, rm, Pm, Lm);
+                for (i = 0; i < n; i++) {
+                    int bc = cd_model_body_id(cm, ncd[i]), bm = mj_name2id(mm, mjOBJ_BODY, nmj[i]);
+                    if (bc >= 0 && bm >= 0) wx = fmax(wx, dist3(cd->body_c + 3 * bc, md->xipos + 3 * bm));
+                }
+                wx = fmax(wx, dist3(rc, rm));
+                for (k = 0; k < 3; k++) {
+                    wm = fmax(wm, fabs(Pc[k] - Pm[k]) / norm3(Pc));
+                    wm = fmax(wm, fabs(Lc[k] - Lm[k]) / norm3(Lc));
+                }
+                if (wx > 1e-5 || wm > 1e-6) bad = 1;
+                cd_data_free(cd);
+            }
+            mj_deleteData(md);
+            if (wg > 1e-12) bad = 1;
+            snprintf(extra, sizeof extra,
+                     ";\n  arm PD gains, finger torques, closing time %.1e; initial CoMs %.1e m; initial momenta %.1e", wg, wx,
+                     wm);
+        }
+    }
     if (worst > 1e-6) bad = 1;
-    say("twin check %-8s masses, principal inertias, gravity: largest relative difference %.1e%s\n", scene_name[scene],
-        worst, bad ? "  MISMATCH" : "");
+    say("twin check %-8s masses, principal inertias, gravity: largest relative difference %.1e%s%s\n", scene_name[scene],
+        worst, extra, bad ? "  MISMATCH" : "");
     cd_scenario_free(sc);
     mj_deleteModel(mm);
     return bad;
 }
+
+static int scene_on[NSCENE] = {1, 1, 1}; /* --scene NAME (repeatable) runs only the named ones */
 
 static int bench_scenes(int reps)
 {
@@ -357,10 +558,11 @@ static int bench_scenes(int reps)
     say("\n== scenes: capdyn (GSL, event-located stick-slip) vs MuJoCo %s (dt 2 ms), %d interleaved repetitions ==\n",
         mj_versionString(), reps);
     for (sc = 0; sc < NSCENE; sc++)
-        if (twin_check(sc)) return 1;
+        if (scene_on[sc] && twin_check(sc)) return 1;
     for (rep = 0; rep < reps; rep++)
         for (sc = 0; sc < NSCENE; sc++) {
             int k;
+            if (!scene_on[sc]) continue;
             for (k = 0; k < 2; k++) {
                 /* alternate which engine goes first */
                 run_result r;
@@ -386,7 +588,7 @@ static int bench_scenes(int reps)
     say("%-8s %-7s %11s %22s %7s %7s %8s %9s %6s %7s %10s %10s\n", "", "", "[ms/s] med", "median (min..max)",
         "min", "median", "", "evals", "[MB]", "[kB]", "[um]", "[um/s]");
     for (sc = 0; sc < NSCENE; sc++)
-        for (eng = 0; eng < 2; eng++) {
+        for (eng = 0; eng < 2 && scene_on[sc]; eng++) {
             const run_result *r = &last[sc][eng];
             char rb[40], r1[16] = "", r2[16] = "";
             double mx = rtf[sc][eng][0];
@@ -403,14 +605,27 @@ static int bench_scenes(int reps)
                 r->nrhs, rss[sc][eng] / 1024.0, r->heap / 1024.0, 1e6 * median_of(acc[sc][eng], reps),
                 1e6 * median_of(rate[sc][eng], reps));
         }
-    say("final object position [mm]: grasp capdyn (%.4f, %.4f, %.4f), MuJoCo (%.4f, %.4f, %.4f)\n",
+    if (scene_on[SC_GRASP])
+        say("final object position [mm]: grasp capdyn (%.4f, %.4f, %.4f), MuJoCo (%.4f, %.4f, %.4f)\n",
         1e3 * last[SC_GRASP][0].pos[0], 1e3 * last[SC_GRASP][0].pos[1], 1e3 * last[SC_GRASP][0].pos[2],
         1e3 * last[SC_GRASP][1].pos[0], 1e3 * last[SC_GRASP][1].pos[1], 1e3 * last[SC_GRASP][1].pos[2]);
+    for (eng = 0; eng < 2 && scene_on[SC_CAPTURE]; eng++) {
+        const run_result *r = &last[SC_CAPTURE][eng];
+        say("capture %-7s bar centre - palm face centre at %g s (palm frame) (%.2f, %.2f, %.2f) mm: %s; "
+            "momentum drift |dP| %.2e kg m/s (%.1e of |P| %.3g), |dL| %.2e kg m^2/s (%.1e of |L| %.3g)\n",
+            eng == ENG_CAPDYN ? "capdyn" : "MuJoCo", CAP_END, 1e3 * r->rel[0], 1e3 * r->rel[1], 1e3 * r->rel[2],
+            cap_held(r->rel) ? "held" : "NOT held", r->dP, r->dP / r->P0, r->P0, r->dL, r->dL / r->L0, r->L0);
+    }
     say("offset: grasp = |object(end) - object(2 s)| over the %g s hold; incline = |block(10 s) - block(1 s)|;\n"
-        "rate: creep rate over the second half of that span (grasp %g-%g s, incline 5.5-10 s).\n"
+        "capture = |bar centre - palm face centre| at %g s (it starts at 50.2 mm);\n"
+        "rate: creep rate over the second half of that span (grasp %g-%g s, incline 5.5-10 s); capture: the bar's\n"
+        "speed relative to the palm (palm frame) over %g-%g s. capture held: the bar's centre between the finger\n"
+        "bases (|y| < 50 mm), within 150 mm of the palm face (x), the bar across the fingers' plane (|z| < 150 mm).\n"
+        "momentum drift: largest change of the whole model's linear momentum and angular momentum about its CoM\n"
+        "from t = 0, at %g, %g and %g s (last repetition; no external force acts).\n"
         "ratio = capdyn RTF / MuJoCo RTF of the same repetition. RSS: peak resident memory of the process\n"
         "running one engine (both libraries mapped); heap: model + data allocated by the engine.\n",
-        T_HOLD, T_CLOSE + 0.5 * T_HOLD, T_CLOSE + T_HOLD);
+        T_HOLD, CAP_END, T_CLOSE + 0.5 * T_HOLD, T_CLOSE + T_HOLD, CAP_LAST, CAP_END, CAP_CLOSE, CAP_LAST, CAP_END);
     return 0;
 }
 
@@ -531,9 +746,23 @@ int main(int argc, char **argv)
         else if (!strcmp(argv[i], "--hold") && i + 1 < argc) T_HOLD = atof(argv[++i]);
         else if (!strcmp(argv[i], "--fd-only")) do_scenes = 0;
         else if (!strcmp(argv[i], "--scenes-only")) do_fd = 0;
+        else if (!strcmp(argv[i], "--scene") && i + 1 < argc) {
+            static int first = 1;
+            int k, found = -1;
+            for (k = 0; k < NSCENE; k++)
+                if (!strcmp(argv[i + 1], scene_name[k])) found = k;
+            if (found < 0) {
+                fprintf(stderr, "bench_speed: --scene: expected grasp, incline or capture, got '%s'\n", argv[i + 1]);
+                return 2;
+            }
+            if (first) memset(scene_on, 0, sizeof scene_on);
+            first = 0;
+            scene_on[found] = 1;
+            i++;
+        }
         else {
             fprintf(stderr, "usage: %s [-r reps (1..%d, default 5)] [-o results.txt] [--hold seconds (grasp hold, default 10)]\n"
-                            "       [--fd-only | --scenes-only]\n", argv[0], MAXREP);
+                            "       [--fd-only | --scenes-only] [--scene grasp|incline|capture ...]\n", argv[0], MAXREP);
             return 2;
         }
     }
