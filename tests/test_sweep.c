@@ -445,7 +445,7 @@ Test(sweep, latin_hypercube_covers_every_stratum_once)
  * while the Space Gripper's fingers keep moving (unresolved). This test
  * fails as soon as that changes, in either direction. Durations of 1.6 s:
  * every verdict of this grid is reached before 1.5 s; the unresolved one is
- * still unresolved at 4 s. */
+ * still unresolved at 8 s (bench/region_settings.sh). */
 Test(sweep, tako_vs_space_region_on_a_coarse_grid, .timeout = 900)
 {
     static const char *names[2] = {"tako_vs_space_region.toml", "tako_vs_space_region_space.toml"};
