@@ -44,7 +44,7 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli examples test asan bench demo figures clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli examples test asan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI)
 
@@ -59,6 +59,7 @@ help:
 	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
+	@echo "make capture-map  the capture-success map (aim error x tumbling rate, ~25 runs; docs/capture.md)"
 	@echo "make install PREFIX=/usr/local   static libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
 	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
@@ -187,6 +188,10 @@ demo: deps
 figures: deps
 	@$(MAKE) --no-print-directory $(CLI)
 	@bash plots/figures.sh
+
+capture-map: deps
+	@$(MAKE) --no-print-directory $(CLI)
+	@bash plots/capture_map.sh
 
 clean:
 	rm -rf build build-asan build-fuzz build-mpi figures

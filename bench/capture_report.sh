@@ -6,12 +6,13 @@
 # momenta conserved).
 #
 #   bench/capture_report.sh            (CAPDYN=build/capdyn, OUT=/tmp;
-#                                       REPORT_ONLY=1 re-reads the last runs' summaries)
+#                                       REPORT_ONLY=1 re-reads the last runs' summaries;
+#                                       CAPTURE_SCENARIOS="NAME ..." other scenarios)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CAPDYN=${CAPDYN:-build/capdyn}
 OUT=${OUT:-/tmp}
-for n in capture_handrail_tumbling capture_body_offset capture_too_fast; do
+for n in ${CAPTURE_SCENARIOS:-capture_handrail_tumbling capture_body_offset capture_too_fast}; do
     for att in on off; do
         args=()
         [ $att = off ] && args=(--set control.attitude.on=false)

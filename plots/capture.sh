@@ -31,7 +31,9 @@ names=("$@")
 
 # the target's box half extents and handrail bar (centre, target frame; the
 # bar runs along the target's z, 0.3 m long) of each scenario
-bar_of() { case "$1" in capture_body_offset) echo "-0.95 0.25 0.2" ;; *) echo "-0.95 0.0 0.2" ;; esac; }
+# (capture_docking_fixture: its cylinder, drawn as a bar; the solar-panel
+# targets' wings are not drawn)
+bar_of() { case "$1" in capture_body_offset) echo "-0.95 0.25 0.2" ;; capture_docking_fixture) echo "-0.95 -0.3 0.2" ;; *) echo "-0.95 0.0 0.2" ;; esac; }
 
 for n in "${names[@]}"; do
     h5="$D/$n.h5"

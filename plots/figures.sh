@@ -9,6 +9,10 @@
 #   FIGURES_DIR    where to write (default figures)
 #   CAPDYN_RUN_ARGS  extra arguments for every `capdyn run`, e.g.
 #                  "--set simulation.duration=0.2" for a quick look
+#   CAPTURE_MAP    1: also the capture-success map of plots/capture_map.sh
+#                  (25 capture runs, ~10 min of one core; `make capture-map`
+#                  alone); the capture scenarios' figures (plots/capture.sh,
+#                  three runs) are always drawn
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CAPDYN=${CAPDYN:-build/capdyn}
@@ -108,6 +112,10 @@ for ext in png svg; do
             "Space Gripper (region area $area_s L^2)" "Graspable region: $what over the object's initial position"
     done
 done
+
+# ---- Issue 10: capture of a tumbling satellite (docs/capture.md) ----------
+FIGURES_DIR="$OUT" CAPDYN="$CAPDYN" bash plots/capture.sh
+if [ "${CAPTURE_MAP:-0}" = 1 ]; then FIGURES_DIR="$OUT" CAPDYN="$CAPDYN" bash plots/capture_map.sh; fi
 
 echo "figures written to $OUT/:"
 ls -1 "$OUT" | grep -v '^data$' | sed 's/^/  /'

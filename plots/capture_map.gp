@@ -1,0 +1,60 @@
+# The capture-success map (docs/capture.md, "The capture map"): one cell per
+# variant of a capdyn sweep over the aim error across the bar (first key,
+# shown in mm) x the target's tumbling rate (second key, deg/s). Left: the
+# verdict, each cell labelled with the peak contact force on the target [N]
+# (a few newtons and more: the hand closed on the bar). Right: the time to
+# capture (blank: not captured).
+#
+# usage: gnuplot -c plots/capture_map.gp MAP.dat OUT.(png|svg) "TITLE"
+#   MAP.dat   capdyn sweep --table SUMMARY.h5 (a grid over two keys)
+# Table columns (two keys): 1 index, 2-3 values, 4-5 normalised values,
+# 6 verdict, 7 status, 8 t_capture, 9 t_escape, 10 peak_fn, ...
+
+if (ARGC < 3) { print "usage: gnuplot -c capture_map.gp MAP.dat OUT TITLE"; exit status 2 }
+f = ARG1; out = ARG2; ttl = ARG3
+
+if (out[strlen(out)-3:] eq ".svg") {
+    set terminal svg size 1100, 520 dynamic enhanced font "sans,11" background rgb "white"
+} else {
+    set terminal pngcairo size 1100, 520 enhanced font "sans,11"
+}
+set output out
+
+# the cell size: the grid steps of both keys
+stats f using ($2 * 1000) nooutput
+x_lo = STATS_min; x_hi = STATS_max
+stats f using 3 nooutput
+y_lo = STATS_min; y_hi = STATS_max
+stats f using 1 nooutput
+nvar = STATS_records
+stats f using ($3 == y_lo ? 1 : 0) nooutput
+nx = STATS_sum
+ny = nvar / nx
+dx = nx > 1 ? (x_hi - x_lo) / (nx - 1) : 1
+dy = ny > 1 ? (y_hi - y_lo) / (ny - 1) : 1
+set xrange [x_lo - dx / 2 : x_hi + dx / 2]
+set yrange [y_lo - dy / 2 : y_hi + dy / 2]
+
+# verdict colours: captured green, escaped red, unresolved amber, failed
+# dark grey, not run (an interrupted sweep) light grey
+vcol(v, s) = (s == -1) ? 0xd0d0d0 : (s != 0) ? 0x505050 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : 0xffbf00
+# (the force is read inside: a NaN argument would make the label "nan")
+vlab(s) = (s == -1) ? "not run" : (s != 0) ? "failed" : sprintf("%.1f", column(10))
+
+set xlabel "aim error across the bar, control.misalign.position[0] [mm]"
+set ylabel "tumbling rate about the target's x [deg/s]"
+set key off
+set multiplot layout 1, 2 title ttl noenhanced
+
+set title "verdict: green captured, red escaped, amber unresolved\n(cells: peak contact force on the target [N])" noenhanced
+unset colorbox
+plot f using ($2 * 1000):3:(dx / 2):(dy / 2):(vcol($6, $7)) with boxxyerror fs solid 0.85 noborder lc rgb variable, \
+     f using ($2 * 1000):3:(vlab($7)) with labels font ",9"
+
+set title "time to capture [s] (blank: not captured)" noenhanced
+set colorbox
+set palette rgbformulae 33,13,10
+set cblabel "t_capture [s]" noenhanced
+plot f using ($2 * 1000):3:(dx / 2):(dy / 2):($7 == 0 && $6 == 1 ? $8 : 1 / 0) with boxxyerror fs solid 0.9 noborder lc palette, \
+     f using ($2 * 1000):3:($7 == 0 && $6 == 1 ? sprintf("%.2f", $8) : "") with labels font ",9"
+unset multiplot
