@@ -1975,7 +1975,7 @@ struct Builder {
         Tab t(table_of(*e.val, "control"), "control",
               {"type", "system", "fixture", "grasp_point", "grasp_rpy_deg", "approach_axis", "lateral_tol", "kp_pos",
                "kp_rot", "v_max", "w_max", "dls", "qd_max_deg_s", "rate_gain", "tau_max", "trigger_distance",
-               "close_time", "impedance", "attitude", "misalign", "start"});
+               "close_time", "impedance", "detumble", "attitude", "misalign", "start"});
         choice_of(t.need("type", "'capture'"), t.kp("type"), {"capture"});
         std::unique_ptr<cd_ctrl_config> c(new cd_ctrl_config(cd_ctrl_config_default()));
         /* the chaser: the gripper's system by default */
@@ -2038,6 +2038,17 @@ struct Builder {
             c->imp_wn = it.num("frequency", c->imp_wn, Range::NonNeg);
             c->imp_zeta = it.num("damping_ratio", c->imp_zeta, Range::NonNeg);
         }
+        if (Entry *g = t.get("detumble")) {
+            std::string dp = t.kp("detumble");
+            Tab dt(table_of(*g->val, dp), dp, {"on", "after", "gain", "force_max", "moment_max", "base"});
+            c->detumble = dt.get("on") ? (bool_of(*dt.get("on")->val, dt.kp("on")) ? 1 : 0) : 1;
+            c->detumble_after = dt.num("after", c->detumble_after, Range::NonNeg);
+            c->detumble_gain = dt.num("gain", c->detumble_gain, Range::Pos);
+            c->detumble_f_max = dt.num("force_max", c->detumble_f_max, Range::Pos);
+            dt.vec("moment_max", 3, c->detumble_n_max, Range::Pos);
+            if (Entry *b = dt.get("base"))
+                c->detumble_base = choice_of(*b->val, dt.kp("base"), {"damp", "attitude"}) == "damp";
+        }
         if (Entry *g = t.get("attitude")) {
             std::string ap = t.kp("attitude");
             Tab at(table_of(*g->val, ap), ap, {"on", "kp", "kd", "tau_max"});
@@ -2068,7 +2079,7 @@ struct Builder {
             for (size_t k = 0; k < run.close_act.size(); k++) { c->close_act[k] = run.close_act[k]; c->close_u[k] = run.close_u[k]; }
         }
         c->user_switch0 = m->nuser;
-        if (cd_model_set_user_switches(m.get(), m->nuser + 2, &err) != CD_OK) builder_fail(t.n->loc, t.path);
+        if (cd_model_set_user_switches(m.get(), m->nuser + (c->detumble ? 3 : 2), &err) != CD_OK) builder_fail(t.n->loc, t.path);
         run.control = std::move(c);
     }
 
