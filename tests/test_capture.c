@@ -344,6 +344,40 @@ Test(capture, checkpoint_with_the_controller_state_reruns_bit_identical, .timeou
     run_close(&r);
 }
 
+/* close.on = "trigger" for clutched fingers: a Space Gripper on the arm
+ * (the handrail scenario with gripper.type = "space"; closing schedule 120
+ * deg in 1 s). Before the trigger every finger's schedule angle is 0 (the
+ * controller holds d->finger_t0 at +inf); 0.25 s after it the schedule is
+ * a quarter of the way: theta = 0.25 s x 120 deg / 1 s = 30 deg (to 1e-9
+ * rad), and finger_t0 is the trigger time. */
+Test(capture, space_gripper_closes_on_the_trigger, .timeout = 300)
+{
+    const char *ov[] = {"gripper.type=\"space\"", "simulation.duration=3.0"};
+    run_t r;
+    const cd_model *m;
+    double tt;
+    int f;
+    run_open(&r, HANDRAIL, ov, 2);
+    m = r.sc->model;
+    cr_assert(m->nfinger == 4 && r.sc->control->nclose_finger == 4, "%d fingers, %d closed on the trigger", m->nfinger,
+              r.sc->control->nclose_finger);
+    while (cd_ctrl_phase_of(r.c, r.d) == CD_CTRL_APPROACH && r.d->t < 3.0 - 1e-12) {
+        advance_to(&r, r.d->t + 0.1);
+        for (f = 0; f < m->nfinger && cd_ctrl_phase_of(r.c, r.d) == CD_CTRL_APPROACH; f++)
+            cr_assert(r.d->finger_theta[f] == 0.0 && isinf(r.d->finger_t0[f]), "t %g: finger %d at %g rad before the trigger",
+                      r.d->t, f, r.d->finger_theta[f]);
+    }
+    tt = cd_ctrl_t_trigger(r.c);
+    cr_assert(tt > 2.0 && tt < 2.9, "trigger at %g s", tt);
+    advance_to(&r, tt + 0.25);
+    for (f = 0; f < m->nfinger; f++) {
+        cr_expect(r.d->finger_t0[f] == tt, "finger %d: origin %g, trigger %g", f, r.d->finger_t0[f], tt);
+        cr_expect(fabs(r.d->finger_theta[f] - 30.0 * M_PI / 180) < 1e-9, "finger %d: schedule %.12g rad", f,
+                  r.d->finger_theta[f]);
+    }
+    run_close(&r);
+}
+
 /* Bad mounted-gripper and [control] inputs: one message naming the key and
  * what was expected. */
 static void refused(const char *ov, const char *want)
@@ -366,7 +400,8 @@ Test(capture, bad_inputs_are_refused_with_the_key)
     refused("gripper.attach=\"elbow\"", "key 'gripper.attach': expected 'base' or a link of system 'chaser', got 'elbow'");
     refused("gripper.palm.mass=2.0", "key 'gripper.palm.mass': does not apply to a gripper mounted on a link");
     refused("gripper.system=\"target\"", "key 'gripper.system': expected a [[system]] (the chaser), got the target 'target'");
-    refused("gripper.type=\"space\"", "key 'gripper.close.on': expected 'time' for a 'space' gripper");
+    refused("gripper.close={on=\"trigger\", start=1.0}",
+            "key 'gripper.close.start': does not apply with on = 'trigger'");
     refused("control.fixture=\"target/nope\"", "key 'control.fixture': expected a shape \"system/shape\" of another system, got 'target/nope'");
     refused("gripper.finger_joint.q0_deg=[10.0]", "key 'gripper.finger_joint.q0_deg': expected 2 angles (one per finger link)");
     refused("control.start=\"later\"", "key 'control.start'");

@@ -13,7 +13,8 @@
  *             torques by a rate servo with torque limits;
  *   CLOSING   from the located instant the palm's grasp point comes within
  *             trigger_distance of the fixture: the gripper's close command
- *             (ctrl of its actuators) is on, the tracking goes on;
+ *             (ctrl of its actuators) is on, clutched fingers' closing
+ *             schedules start (d->finger_t0), the tracking goes on;
  *   HOLD      close_time later (a located time event): joint impedance about
  *             the joint angles of that instant (the capture pose), absorbing
  *             the target's momentum;
@@ -70,6 +71,9 @@ typedef struct {
     int nclose;             /* gripper actuators closed at the trigger */
     int close_act[CD_CTRL_MAX_ACT];
     double close_u[CD_CTRL_MAX_ACT]; /* their ctrl while closing and holding [N m] */
+    int nclose_finger;      /* clutched fingers (space, torque_switch) whose closing schedule starts at the
+                               trigger: d->finger_t0 = +inf before it, the trigger time from then on */
+    int close_finger[CD_CTRL_MAX_ACT];
     double imp_wn, imp_zeta;/* HOLD joint impedance: natural frequency w_n [rad/s] and damping ratio zeta:
                                tau_j = H_jj (w_n^2 (q_c_j - q_j) - 2 zeta w_n qd_j) */
     int attitude;           /* 1: base attitude control on */

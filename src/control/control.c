@@ -117,6 +117,15 @@ cd_ctrl *cd_ctrl_create(const cd_model *m, const cd_ctrl_config *cfg, cd_error *
         cd_error_set(err, CD_EINVAL, "control: %d close actuators (at most %d)", cfg->nclose, CD_CTRL_MAX_ACT);
         return NULL;
     }
+    if (cfg->nclose_finger < 0 || cfg->nclose_finger > CD_CTRL_MAX_ACT) {
+        cd_error_set(err, CD_EINVAL, "control: %d close fingers (at most %d)", cfg->nclose_finger, CD_CTRL_MAX_ACT);
+        return NULL;
+    }
+    for (i = 0; i < cfg->nclose_finger; i++)
+        if (cfg->close_finger[i] < 0 || cfg->close_finger[i] >= m->nfinger) {
+            cd_error_set(err, CD_EINVAL, "control: close finger %d is not a clutched finger of the model", cfg->close_finger[i]);
+            return NULL;
+        }
     for (i = 0; i < cfg->nclose; i++)
         if (cfg->close_act[i] < 0 || cfg->close_act[i] >= m->nu) {
             cd_error_set(err, CD_EINVAL, "control: close actuator %d is not an actuator of the model", cfg->close_act[i]);
@@ -409,6 +418,7 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     }
     for (i = 0; i < c->na; i++) d->qfrc_applied[m->body_dof[c->arm[i]]] = clamp(tau[i], k->tau_max);
     for (i = 0; i < k->nclose; i++) d->ctrl[k->close_act[i]] = phase == CD_CTRL_APPROACH ? 0.0 : k->close_u[i];
+    for (i = 0; i < k->nclose_finger; i++) d->finger_t0[k->close_finger[i]] = phase == CD_CTRL_APPROACH ? HUGE_VAL : c->t_trig;
     if (k->attitude) {
         double e[3], n[3];
         const double *w0 = d->body_w + 3 * b0;

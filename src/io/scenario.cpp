@@ -1600,6 +1600,7 @@ struct Builder {
         bool close_trigger = false;    /* [gripper] close.on = "trigger" */
         std::vector<int> close_act;    /* the gripper's motors and their closing command */
         std::vector<double> close_u;
+        std::vector<int> close_finger; /* clutched fingers whose schedule starts at the trigger */
         std::unique_ptr<cd_ctrl_config> control; /* [control] */
         std::vector<double> palm_pos = {0, 0, 0}, palm_rot = {1, 0, 0, 0, 1, 0, 0, 0, 1}; /* palm frame on it */
         double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
@@ -1843,8 +1844,6 @@ struct Builder {
             std::string cp = t.kp("close");
             Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start", "on"});
             if (Entry *o = ct.get("on")) run.close_trigger = choice_of(*o->val, ct.kp("on"), {"time", "trigger"}) == "trigger";
-            if (run.close_trigger && ty != "soft" && ty != "tako")
-                fail_at(ct.get("on")->val->loc, ct.kp("on"), "expected 'time' for a '" + ty + "' gripper ('trigger' needs a 'soft' or 'tako' gripper: its motors take the controller's command; clutched fingers follow a time schedule)");
             if (run.close_trigger && ct.get("start")) fail_at(ct.get("start")->kloc, ct.kp("start"), "does not apply with on = 'trigger' (the [control] grasp trigger starts the closing)");
             if (run.close_trigger && open_at > 0) fail_at(t.get("open_at")->kloc, t.kp("open_at"), "does not apply with close.on = 'trigger'");
             ctime = ct.num("time", ctime, Range::Pos);
@@ -1934,7 +1933,9 @@ struct Builder {
                 fd.torque_limit = lim;
                 fd.sched_t = st.data(); fd.sched_q = sq.data(); fd.nsched = (int)st.size();
                 fd.open_at = open_at;
-                if (cd_model_add_finger(m.get(), &fd, &err) < 0) builder_fail(t.n->loc, t.path);
+                int fid = cd_model_add_finger(m.get(), &fd, &err);
+                if (fid < 0) builder_fail(t.n->loc, t.path);
+                if (run.close_trigger) run.close_finger.push_back(fid); /* its schedule starts at the trigger */
             }
         }
         /* pairs: the hand's check points against every target shape, and each
@@ -2077,6 +2078,9 @@ struct Builder {
             if (run.close_act.size() > CD_CTRL_MAX_ACT) fail_at(t.n->loc, t.path, "expected at most " + std::to_string(CD_CTRL_MAX_ACT) + " gripper motors");
             c->nclose = (int)run.close_act.size();
             for (size_t k = 0; k < run.close_act.size(); k++) { c->close_act[k] = run.close_act[k]; c->close_u[k] = run.close_u[k]; }
+            if (run.close_finger.size() > CD_CTRL_MAX_ACT) fail_at(t.n->loc, t.path, "expected at most " + std::to_string(CD_CTRL_MAX_ACT) + " clutched fingers");
+            c->nclose_finger = (int)run.close_finger.size();
+            for (size_t k = 0; k < run.close_finger.size(); k++) c->close_finger[k] = run.close_finger[k];
         }
         c->user_switch0 = m->nuser;
         if (cd_model_set_user_switches(m.get(), m->nuser + (c->detumble ? 3 : 2), &err) != CD_OK) builder_fail(t.n->loc, t.path);
