@@ -13,17 +13,27 @@
  *             torques by a rate servo with torque limits;
  *   CLOSING   from the located instant the palm's grasp point comes within
  *             trigger_distance of the fixture: the gripper's close command
- *             (ctrl of its actuators) is on, the tracking goes on;
+ *             (ctrl of its actuators) is on, clutched fingers' closing
+ *             schedules start (d->finger_t0), the tracking goes on;
  *   HOLD      close_time later (a located time event): joint impedance about
  *             the joint angles of that instant (the capture pose), absorbing
- *             the target's momentum, its damping stopping the relative motion.
+ *             the target's momentum;
+ *   DETUMBLE  (optional) detumble_after later (a located time event): a
+ *             damping wrench at the palm against the palm's twist relative
+ *             to the base, scaled with the held target's inertia and limited
+ *             per axis to what the grasp carries, applied through the arm's
+ *             joints (tau = J^T W): the arm's joint rates, and with them the
+ *             target's motion relative to the chaser, go to zero through the
+ *             contacts; the attitude law then damps the base rate only.
  * Base attitude control (optional): a reaction-wheel torque on the base,
  * PD toward the initial attitude, each component limited; an external torque
  * on the chaser (the wheels' momentum is not modelled).
  * Outputs go to d->qfrc_applied (arm joints), d->xfrc_applied (base torque)
  * and d->ctrl (gripper actuators); nothing allocates after cd_ctrl_create and
- * nothing prints. The controller's capture pose and trigger time live in the
- * cd_ctrl, not in the data: cd_state_get / cd_state_set do not save them. */
+ * nothing prints. The controller's memory (trigger, hold and detumble times,
+ * the capture pose) lives in the cd_ctrl, not in the data: cd_state_get /
+ * cd_state_set do not save it; cd_ctrl_state_get / cd_ctrl_state_set do
+ * (save both, next to each other, for a checkpoint). */
 #ifndef CAPDYN_CONTROL_H
 #define CAPDYN_CONTROL_H
 
@@ -35,7 +45,7 @@ extern "C" {
 
 #define CD_CTRL_MAX_ACT 16
 
-typedef enum { CD_CTRL_APPROACH = 0, CD_CTRL_CLOSING = 1, CD_CTRL_HOLD = 2 } cd_ctrl_phase;
+typedef enum { CD_CTRL_APPROACH = 0, CD_CTRL_CLOSING = 1, CD_CTRL_HOLD = 2, CD_CTRL_DETUMBLE = 3 } cd_ctrl_phase;
 
 typedef struct {
     int sys;                /* the chaser: a free-floating system */
@@ -61,6 +71,9 @@ typedef struct {
     int nclose;             /* gripper actuators closed at the trigger */
     int close_act[CD_CTRL_MAX_ACT];
     double close_u[CD_CTRL_MAX_ACT]; /* their ctrl while closing and holding [N m] */
+    int nclose_finger;      /* clutched fingers (space, torque_switch) whose closing schedule starts at the
+                               trigger: d->finger_t0 = +inf before it, the trigger time from then on */
+    int close_finger[CD_CTRL_MAX_ACT];
     double imp_wn, imp_zeta;/* HOLD joint impedance: natural frequency w_n [rad/s] and damping ratio zeta:
                                tau_j = H_jj (w_n^2 (q_c_j - q_j) - 2 zeta w_n qd_j) */
     int attitude;           /* 1: base attitude control on */
@@ -68,13 +81,24 @@ typedef struct {
     double att_tau_max;     /* per-axis wheel torque limit [N m] (> 0) */
     int start_hold;         /* 1: HOLD from the start, about the model's initial joint angles, the
                                gripper closed (a target already held); 0 (default): APPROACH */
-    int user_switch0;       /* the first of the two user switches it uses */
+    int detumble;           /* 1: DETUMBLE detumble_after seconds after HOLD began (needs a third user switch) */
+    double detumble_after;  /* [s] from HOLD to DETUMBLE (>= 0) */
+    double detumble_gain;   /* DETUMBLE gain k_d [1/s] (> 0): the palm's wrench (at its grasp point, palm axes)
+                               W_i = -sat(k_d M_i V_i, W_max,i) against its twist V relative to the base, M_i
+                               the held target's mass (forces) or moment of inertia about that axis (moments) */
+    double detumble_f_max;  /* [N] W_max of the three force components (> 0) */
+    double detumble_n_max[3]; /* [N m] W_max of the moments about the palm's x, y, z (> 0): what the grasp
+                               carries without slipping or back-driving the fingers */
+    int detumble_base;      /* 1: while detumbling, the attitude law damps the base rate only (k_p = 0), bringing
+                               the combined body to rest where it is; 0: it goes on turning it back */
+    int user_switch0;       /* the first of the user switches it uses (two; three with detumble) */
 } cd_ctrl_config;
 
 /* Defaults: gains kp 1 /s, v_max 0.1 m/s, w_max 0.2 rad/s, dls 0.05 m,
  * qd_max 0.2 rad/s, rate_gain 20 /s, no torque limit, trigger 0.02 m,
  * close_time 1 s, imp_wn 1 rad/s, imp_zeta 1, attitude off (kp 500,
- * kd 2000, limit 1 N m), approach axis +y, lateral_tol 0.01 m; bodies -1. */
+ * kd 2000, limit 1 N m), approach axis +y, lateral_tol 0.01 m, detumble off
+ * (after 1 s, gain 1 /s, limits 10 N and 1 N m, base rate damping on); bodies -1. */
 cd_ctrl_config cd_ctrl_config_default(void);
 
 typedef struct cd_ctrl cd_ctrl;
@@ -92,10 +116,25 @@ void cd_ctrl_install(cd_ctrl *c, cd_data *d);
 void cd_ctrl_control(const cd_model *m, cd_data *d, void *user);
 double cd_ctrl_switch(const cd_model *m, const cd_data *d, int i, void *user);
 int cd_ctrl_transition(const cd_model *m, cd_data *d, int i, void *user);
-/* Phase of d (its user modes), time of the trigger (NaN before), time HOLD began (NaN before). */
+/* Phase of d (its user modes), time of the trigger (NaN before), time HOLD
+ * began (NaN before), time DETUMBLE began (NaN before). */
 cd_ctrl_phase cd_ctrl_phase_of(const cd_ctrl *c, const cd_data *d);
 double cd_ctrl_t_trigger(const cd_ctrl *c);
 double cd_ctrl_t_hold(const cd_ctrl *c);
+double cd_ctrl_t_detumble(const cd_ctrl *c);
+/* The controller's memory, for checkpoints next to cd_state_get: the
+ * trigger, HOLD and DETUMBLE times and the capture pose (the joint angles
+ * HOLD holds). The phase itself is in the data's user modes (cd_state_get).
+ * cd_ctrl_state_size: doubles (3 + 2 + the arm's joints). cd_ctrl_state_get
+ * copies it into buf (caller-owned, that size). cd_ctrl_state_set restores
+ * it into c, a controller of the same configuration's model (possibly
+ * another cd_ctrl, as after a restart): CD_EINVAL with err filled (err may
+ * be NULL) if buf is not a controller state of this size, c unchanged.
+ * Restoring the data's state and the controller's together and continuing
+ * is bit-identical to not having stopped. */
+size_t cd_ctrl_state_size(const cd_ctrl *c);
+void cd_ctrl_state_get(const cd_ctrl *c, double *buf);
+cd_status cd_ctrl_state_set(cd_ctrl *c, const double *buf, cd_error *err);
 /* Base attitude error (rotation angle from the initial attitude) [rad], after cd_kinematics. */
 double cd_ctrl_base_angle(const cd_ctrl *c, const cd_model *m, const cd_data *d);
 

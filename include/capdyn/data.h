@@ -201,7 +201,10 @@ typedef struct cd_data {
     int *finger_mode;     /* (nfinger) cd_clutch_mode */
     double *finger_brake; /* (nfinger) TORQUE_SWITCH: inner joint angle at the switch [rad] */
     double *finger_load;  /* (nfinger) largest joint coupling torque [N m] (the clutch's load) */
-    double *finger_theta; /* (nfinger) schedule angle theta_s(t) [rad] */
+    double *finger_theta; /* (nfinger) schedule angle theta_s(t - finger_t0) [rad] */
+    double *finger_t0;    /* (nfinger) an input: origin of the closing schedule [s], which runs on t - t0 (0 at
+                             reset; +inf holds it at its first row, open; e.g. a controller's grasp trigger
+                             sets it, docs/capture.md); part of the state */
 
     /* the generic switch table: units 0..nsw-1 = slots, stops, frictions, fingers, user switches */
     double *sw_tswitch;   /* (nsw) time of the unit's last switch [s] */

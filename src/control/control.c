@@ -17,7 +17,23 @@
  * HOLD: tau_j = H_jj (w_n^2 (q_c_j - q_j) - 2 zeta w_n qd_j) about the joint
  * angles q_c at the instant HOLD began (a joint-space impedance, each joint a
  * second-order system of natural frequency w_n and damping ratio zeta for
- * its own inertia; the target's inertia, once held, lowers the frequency). Attitude: n = sat(k_p e - k_d w0)
+ * its own inertia; the target's inertia, once held, lowers the frequency).
+ * DETUMBLE: a damping wrench at the palm's grasp point against the palm's
+ * twist V relative to the base (V = sum_j S_j qd_j over the arm's joints,
+ * S_j = [a_j x (x_g - x_j); a_j] for a revolute joint), per palm axis i
+ *     W_i = -sat(k_d M_i V_i, W_max,i),   tau = J^T W,
+ * M_i the held target's mass or its moment of inertia about that axis
+ * through the grasp point (as if it were fixed to the palm: the arm's own
+ * inertia is thousands of times smaller than a held satellite's). Passive:
+ * tau . qd = W . V = sum_i W_i V_i <= 0, whatever the coupling with the
+ * contacts and the base, and the torque limit scales tau as a whole, which
+ * keeps the sign. The per-axis limits keep the wrench within what the grasp
+ * carries: a moment about a bar's own axis only by friction, about the
+ * approach axis only up to the fingers' grip (beyond it they are
+ * back-driven and the target turns in the hand). Per-joint damping scaled
+ * by the target's inertia about each joint's axis was tried first: the
+ * shoulder's share (410 kg at 3 m) saturated at any rate and twisted the
+ * bar in the fingers. Attitude: n = sat(k_p e - k_d w0)
  * with e = 1/2 sum_i r_i x r0_i (columns of the base rotation now and at
  * t = 0), the small-angle rotation vector that turns the base back. */
 #include "capdyn/control.h"
@@ -37,7 +53,8 @@ struct cd_ctrl {
     double *Jg;             /* (6 x nj) */
     double R0[9];           /* base attitude at t = 0 */
     double q_hold[MAXJ];
-    double t_trig, t_hold;
+    double t_trig, t_hold, t_det;
+    int tsys;               /* the target's system (the fixture's) */
 };
 
 cd_ctrl_config cd_ctrl_config_default(void)
@@ -63,6 +80,11 @@ cd_ctrl_config cd_ctrl_config_default(void)
     c.att_kp = 500.0;
     c.att_kd = 2000.0;
     c.att_tau_max = 1.0;
+    c.detumble_after = 1.0;
+    c.detumble_gain = 1.0;
+    c.detumble_f_max = 10.0;
+    c.detumble_n_max[0] = c.detumble_n_max[1] = c.detumble_n_max[2] = 1.0;
+    c.detumble_base = 1;
     return c;
 }
 
@@ -86,15 +108,24 @@ cd_ctrl *cd_ctrl_create(const cd_model *m, const cd_ctrl_config *cfg, cd_error *
         cd_error_set(err, CD_EINVAL, "control: the fixture (body %d) must be a body of another system", cfg->fixture_body);
         return NULL;
     }
-    if (cfg->user_switch0 < 0 || cfg->user_switch0 + 2 > m->nuser) {
-        cd_error_set(err, CD_EINVAL, "control: needs user switches %d and %d (the model has %d)", cfg->user_switch0,
-                     cfg->user_switch0 + 1, m->nuser);
+    if (cfg->user_switch0 < 0 || cfg->user_switch0 + (cfg->detumble ? 3 : 2) > m->nuser) {
+        cd_error_set(err, CD_EINVAL, "control: needs user switches %d to %d (the model has %d)", cfg->user_switch0,
+                     cfg->user_switch0 + (cfg->detumble ? 2 : 1), m->nuser);
         return NULL;
     }
     if (cfg->nclose < 0 || cfg->nclose > CD_CTRL_MAX_ACT) {
         cd_error_set(err, CD_EINVAL, "control: %d close actuators (at most %d)", cfg->nclose, CD_CTRL_MAX_ACT);
         return NULL;
     }
+    if (cfg->nclose_finger < 0 || cfg->nclose_finger > CD_CTRL_MAX_ACT) {
+        cd_error_set(err, CD_EINVAL, "control: %d close fingers (at most %d)", cfg->nclose_finger, CD_CTRL_MAX_ACT);
+        return NULL;
+    }
+    for (i = 0; i < cfg->nclose_finger; i++)
+        if (cfg->close_finger[i] < 0 || cfg->close_finger[i] >= m->nfinger) {
+            cd_error_set(err, CD_EINVAL, "control: close finger %d is not a clutched finger of the model", cfg->close_finger[i]);
+            return NULL;
+        }
     for (i = 0; i < cfg->nclose; i++)
         if (cfg->close_act[i] < 0 || cfg->close_act[i] >= m->nu) {
             cd_error_set(err, CD_EINVAL, "control: close actuator %d is not an actuator of the model", cfg->close_act[i]);
@@ -103,7 +134,9 @@ cd_ctrl *cd_ctrl_create(const cd_model *m, const cd_ctrl_config *cfg, cd_error *
     if (!(cfg->dls > 0) || !(cfg->qd_max > 0) || !(cfg->rate_gain > 0) || !(cfg->kp_pos >= 0) || !(cfg->kp_rot >= 0) ||
         !(cfg->v_max > 0) || !(cfg->w_max > 0) || !(cfg->tau_max >= 0) || !(cfg->trigger_distance > 0) ||
         !(cfg->close_time >= 0) || !(cfg->imp_wn >= 0) || !(cfg->imp_zeta >= 0) || !(cfg->lateral_tol > 0) ||
-        (cfg->attitude && !(cfg->att_tau_max > 0 && cfg->att_kp >= 0 && cfg->att_kd >= 0))) {
+        (cfg->attitude && !(cfg->att_tau_max > 0 && cfg->att_kp >= 0 && cfg->att_kd >= 0)) ||
+        (cfg->detumble && !(cfg->detumble_after >= 0 && cfg->detumble_gain > 0 && cfg->detumble_f_max > 0 &&
+                            cfg->detumble_n_max[0] > 0 && cfg->detumble_n_max[1] > 0 && cfg->detumble_n_max[2] > 0))) {
         cd_error_set(err, CD_EINVAL, "control: a gain or limit is out of range (control.h lists each one's range)");
         return NULL;
     }
@@ -136,7 +169,8 @@ cd_ctrl *cd_ctrl_create(const cd_model *m, const cd_ctrl_config *cfg, cd_error *
         return NULL;
     }
     cd_quat_to_m3(c->R0, m->sys_quat0 + 4 * cfg->sys);
-    c->t_trig = c->t_hold = NAN;
+    c->tsys = m->body_sys[cfg->fixture_body];
+    c->t_trig = c->t_hold = c->t_det = NAN;
     if (cfg->start_hold) {
         for (i = 0; i < n; i++) c->q_hold[i] = m->body_q0[c->arm[i]];
         c->t_trig = c->t_hold = 0.0;
@@ -160,10 +194,60 @@ void cd_ctrl_install(cd_ctrl *c, cd_data *d)
 cd_ctrl_phase cd_ctrl_phase_of(const cd_ctrl *c, const cd_data *d)
 {
     int s = c->c.user_switch0;
+    if (c->c.detumble && d->user_mode[s + 2]) return CD_CTRL_DETUMBLE;
     return c->c.start_hold || d->user_mode[s + 1] ? CD_CTRL_HOLD : d->user_mode[s] ? CD_CTRL_CLOSING : CD_CTRL_APPROACH;
 }
 double cd_ctrl_t_trigger(const cd_ctrl *c) { return c->t_trig; }
 double cd_ctrl_t_hold(const cd_ctrl *c) { return c->t_hold; }
+double cd_ctrl_t_detumble(const cd_ctrl *c) { return c->t_det; }
+
+/* The controller's memory: [magic, na, t_trig, t_hold, t_det, q_hold[na]] */
+#define CTRL_STATE_MAGIC 5471.0 /* an arbitrary tag, stored exactly */
+size_t cd_ctrl_state_size(const cd_ctrl *c) { return (size_t)(5 + c->na); }
+
+void cd_ctrl_state_get(const cd_ctrl *c, double *buf)
+{
+    buf[0] = CTRL_STATE_MAGIC;
+    buf[1] = (double)c->na;
+    buf[2] = c->t_trig;
+    buf[3] = c->t_hold;
+    buf[4] = c->t_det;
+    memcpy(buf + 5, c->q_hold, (size_t)c->na * sizeof(double));
+}
+
+cd_status cd_ctrl_state_set(cd_ctrl *c, const double *buf, cd_error *err)
+{
+    if (!buf || buf[0] != CTRL_STATE_MAGIC || buf[1] != (double)c->na) {
+        cd_error_set(err, CD_EINVAL, "control: not a state of this controller (expected %d arm joints)", c->na);
+        return CD_EINVAL;
+    }
+    c->t_trig = buf[2];
+    c->t_hold = buf[3];
+    c->t_det = buf[4];
+    memcpy(c->q_hold, buf + 5, (size_t)c->na * sizeof(double));
+    return CD_OK;
+}
+
+/* the held target's mass and its moment of inertia about the world axis a
+ * through x, as if fixed to the palm: sum over its bodies of
+ * a^T I_b a + m_b |a x (c_b - x)|^2 */
+static double held_inertia(const cd_ctrl *c, const cd_model *m, const cd_data *d, const double a[3], const double x[3],
+                           double *mass)
+{
+    int b, b1 = m->sys_body_adr[c->tsys], b2 = b1 + m->sys_nbody[c->tsys];
+    double J = 0;
+    *mass = 0;
+    for (b = b1; b < b2; b++) {
+        double ab[3], Ia[3], r[3], t[3];
+        cd_m3_tmulv(ab, d->body_R + 9 * b, a); /* the axis in the body frame */
+        cd_m3_mulv(Ia, m->body_inertia + 9 * b, ab);
+        cd_v3_sub(r, d->body_c + 3 * b, x);
+        cd_v3_cross(t, a, r);
+        J += cd_v3_dot(ab, Ia) + m->body_mass[b] * cd_v3_dot(t, t);
+        *mass += m->body_mass[b];
+    }
+    return J;
+}
 
 /* a frame (pos, rot) fixed on a body, world */
 static void frame_on(const cd_data *d, int b, const double p[3], const double R[9], double x[3], double Rw[9])
@@ -244,13 +328,52 @@ static void approach_twist(const cd_ctrl *c, const cd_data *d, double V[6])
     cd_v3_add(V + 3, V + 3, eR);
 }
 
+/* DETUMBLE: the palm's damping wrench against its twist relative to the base, tau = J^T W */
+static void detumble_torques(const cd_ctrl *c, const cd_model *m, cd_data *d, double *tau)
+{
+    const cd_ctrl_config *k = &c->c;
+    double xf[3], Rf[9], xp[3], Rp[9], xg[3], V[6] = {0, 0, 0, 0, 0, 0}, W[6] = {0, 0, 0, 0, 0, 0}, S[MAXJ][6], big = 0;
+    int i, a;
+    grasp_points(c, d, xf, Rf, xp, Rp, xg);
+    for (a = 0; a < c->na; a++) {
+        int b = c->arm[a];
+        const double *ax = d->body_axisw + 3 * b;
+        double r[3], qd = cd_joint_qd(m, d, b);
+        if (m->body_jnt_type[b] == CD_JOINT_PRISMATIC) {
+            cd_v3_copy(S[a], ax);
+            cd_v3_zero(S[a] + 3);
+        } else {
+            cd_v3_sub(r, xg, d->body_x + 3 * b);
+            cd_v3_cross(S[a], ax, r);
+            cd_v3_copy(S[a] + 3, ax);
+        }
+        for (i = 0; i < 6; i++) V[i] += S[a][i] * qd;
+    }
+    for (i = 0; i < 3; i++) { /* per palm axis e_i (column i of Rp) */
+        double e[3] = {Rp[i], Rp[3 + i], Rp[6 + i]}, mt, Jt = held_inertia(c, m, d, e, xg, &mt);
+        double wf = -clamp(k->detumble_gain * mt * cd_v3_dot(e, V), k->detumble_f_max);
+        double wn = -clamp(k->detumble_gain * Jt * cd_v3_dot(e, V + 3), k->detumble_n_max[i]);
+        cd_v3_axpy(W, wf, e);
+        cd_v3_axpy(W + 3, wn, e);
+    }
+    for (a = 0; a < c->na; a++) {
+        tau[a] = 0;
+        for (i = 0; i < 6; i++) tau[a] += S[a][i] * W[i];
+        if (fabs(tau[a]) > big) big = fabs(tau[a]);
+    }
+    if (k->tau_max > 0 && big > k->tau_max) /* scaled as a whole: tau . qd keeps its sign */
+        for (a = 0; a < c->na; a++) tau[a] *= k->tau_max / big;
+}
+
 void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
 {
     cd_ctrl *c = (cd_ctrl *)user;
     const cd_ctrl_config *k = &c->c;
     int i, j, phase = cd_ctrl_phase_of(c, d), b0 = m->sys_body_adr[k->sys], n = m->sys_ndof[k->sys];
     double tau[MAXJ];
-    if (phase == CD_CTRL_HOLD) {
+    if (phase == CD_CTRL_DETUMBLE) {
+        detumble_torques(c, m, d, tau);
+    } else if (phase == CD_CTRL_HOLD) {
         cd_mass_matrix(m, d, k->sys, d->H);
         for (i = 0; i < c->na; i++) {
             int col = 6 + c->arm[i] - b0 - 1;
@@ -295,11 +418,13 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     }
     for (i = 0; i < c->na; i++) d->qfrc_applied[m->body_dof[c->arm[i]]] = clamp(tau[i], k->tau_max);
     for (i = 0; i < k->nclose; i++) d->ctrl[k->close_act[i]] = phase == CD_CTRL_APPROACH ? 0.0 : k->close_u[i];
+    for (i = 0; i < k->nclose_finger; i++) d->finger_t0[k->close_finger[i]] = phase == CD_CTRL_APPROACH ? HUGE_VAL : c->t_trig;
     if (k->attitude) {
         double e[3], n[3];
         const double *w0 = d->body_w + 3 * b0;
+        double kp = phase == CD_CTRL_DETUMBLE && k->detumble_base ? 0.0 : k->att_kp;
         rot_error(e, d->body_R + 9 * b0, c->R0);
-        for (i = 0; i < 3; i++) n[i] = clamp(k->att_kp * e[i] - k->att_kd * w0[i], k->att_tau_max);
+        for (i = 0; i < 3; i++) n[i] = clamp(kp * e[i] - k->att_kd * w0[i], k->att_tau_max);
         for (i = 0; i < 3; i++) d->xfrc_applied[6 * b0 + i] = n[i];
     }
 }
@@ -309,6 +434,8 @@ double cd_ctrl_switch(const cd_model *m, const cd_data *d, int i, void *user)
     const cd_ctrl *c = (const cd_ctrl *)user;
     int s = c->c.user_switch0;
     (void)m;
+    if (i == s + 2 && c->c.detumble && d->user_mode[s + 2] == 0 && cd_ctrl_phase_of(c, d) == CD_CTRL_HOLD)
+        return c->t_hold + c->c.detumble_after - d->t;
     if (c->c.start_hold) return 1.0;
     if (i == s && d->user_mode[s] == 0) {
         double xf[3], Rf[9], xp[3], Rp[9], xg[3], r[3];
@@ -331,6 +458,10 @@ int cd_ctrl_transition(const cd_model *m, cd_data *d, int i, void *user)
     if (i == s + 1) {
         c->t_hold = d->t;
         for (a = 0; a < c->na; a++) c->q_hold[a] = cd_joint_q(m, d, c->arm[a]);
+        return 1;
+    }
+    if (i == s + 2) {
+        c->t_det = d->t;
         return 1;
     }
     return d->user_mode[i];

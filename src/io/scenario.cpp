@@ -1621,6 +1621,7 @@ struct Builder {
         bool close_trigger = false;    /* [gripper] close.on = "trigger" */
         std::vector<int> close_act;    /* the gripper's motors and their closing command */
         std::vector<double> close_u;
+        std::vector<int> close_finger; /* clutched fingers whose schedule starts at the trigger */
         std::unique_ptr<cd_ctrl_config> control; /* [control] */
         std::vector<double> palm_pos = {0, 0, 0}, palm_rot = {1, 0, 0, 0, 1, 0, 0, 0, 1}; /* palm frame on it */
         double v_max = 1e-3, w_max = 0.05, dwell = 0.2, workspace = 0.0;
@@ -1864,8 +1865,6 @@ struct Builder {
             std::string cp = t.kp("close");
             Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start", "on"});
             if (Entry *o = ct.get("on")) run.close_trigger = choice_of(*o->val, ct.kp("on"), {"time", "trigger"}) == "trigger";
-            if (run.close_trigger && ty != "soft" && ty != "tako")
-                fail_at(ct.get("on")->val->loc, ct.kp("on"), "expected 'time' for a '" + ty + "' gripper ('trigger' needs a 'soft' or 'tako' gripper: its motors take the controller's command; clutched fingers follow a time schedule)");
             if (run.close_trigger && ct.get("start")) fail_at(ct.get("start")->kloc, ct.kp("start"), "does not apply with on = 'trigger' (the [control] grasp trigger starts the closing)");
             if (run.close_trigger && open_at > 0) fail_at(t.get("open_at")->kloc, t.kp("open_at"), "does not apply with close.on = 'trigger'");
             ctime = ct.num("time", ctime, Range::Pos);
@@ -1955,7 +1954,9 @@ struct Builder {
                 fd.torque_limit = lim;
                 fd.sched_t = st.data(); fd.sched_q = sq.data(); fd.nsched = (int)st.size();
                 fd.open_at = open_at;
-                if (cd_model_add_finger(m.get(), &fd, &err) < 0) builder_fail(t.n->loc, t.path);
+                int fid = cd_model_add_finger(m.get(), &fd, &err);
+                if (fid < 0) builder_fail(t.n->loc, t.path);
+                if (run.close_trigger) run.close_finger.push_back(fid); /* its schedule starts at the trigger */
             }
         }
         /* pairs: the hand's check points against every target shape, and each
@@ -1996,7 +1997,7 @@ struct Builder {
         Tab t(table_of(*e.val, "control"), "control",
               {"type", "system", "fixture", "grasp_point", "grasp_rpy_deg", "approach_axis", "lateral_tol", "kp_pos",
                "kp_rot", "v_max", "w_max", "dls", "qd_max_deg_s", "rate_gain", "tau_max", "trigger_distance",
-               "close_time", "impedance", "attitude", "misalign", "start"});
+               "close_time", "impedance", "detumble", "attitude", "misalign", "start"});
         choice_of(t.need("type", "'capture'"), t.kp("type"), {"capture"});
         std::unique_ptr<cd_ctrl_config> c(new cd_ctrl_config(cd_ctrl_config_default()));
         /* the chaser: the gripper's system by default */
@@ -2059,6 +2060,17 @@ struct Builder {
             c->imp_wn = it.num("frequency", c->imp_wn, Range::NonNeg);
             c->imp_zeta = it.num("damping_ratio", c->imp_zeta, Range::NonNeg);
         }
+        if (Entry *g = t.get("detumble")) {
+            std::string dp = t.kp("detumble");
+            Tab dt(table_of(*g->val, dp), dp, {"on", "after", "gain", "force_max", "moment_max", "base"});
+            c->detumble = dt.get("on") ? (bool_of(*dt.get("on")->val, dt.kp("on")) ? 1 : 0) : 1;
+            c->detumble_after = dt.num("after", c->detumble_after, Range::NonNeg);
+            c->detumble_gain = dt.num("gain", c->detumble_gain, Range::Pos);
+            c->detumble_f_max = dt.num("force_max", c->detumble_f_max, Range::Pos);
+            dt.vec("moment_max", 3, c->detumble_n_max, Range::Pos);
+            if (Entry *b = dt.get("base"))
+                c->detumble_base = choice_of(*b->val, dt.kp("base"), {"damp", "attitude"}) == "damp";
+        }
         if (Entry *g = t.get("attitude")) {
             std::string ap = t.kp("attitude");
             Tab at(table_of(*g->val, ap), ap, {"on", "kp", "kd", "tau_max"});
@@ -2087,9 +2099,12 @@ struct Builder {
             if (run.close_act.size() > CD_CTRL_MAX_ACT) fail_at(t.n->loc, t.path, "expected at most " + std::to_string(CD_CTRL_MAX_ACT) + " gripper motors");
             c->nclose = (int)run.close_act.size();
             for (size_t k = 0; k < run.close_act.size(); k++) { c->close_act[k] = run.close_act[k]; c->close_u[k] = run.close_u[k]; }
+            if (run.close_finger.size() > CD_CTRL_MAX_ACT) fail_at(t.n->loc, t.path, "expected at most " + std::to_string(CD_CTRL_MAX_ACT) + " clutched fingers");
+            c->nclose_finger = (int)run.close_finger.size();
+            for (size_t k = 0; k < run.close_finger.size(); k++) c->close_finger[k] = run.close_finger[k];
         }
         c->user_switch0 = m->nuser;
-        if (cd_model_set_user_switches(m.get(), m->nuser + 2, &err) != CD_OK) builder_fail(t.n->loc, t.path);
+        if (cd_model_set_user_switches(m.get(), m->nuser + (c->detumble ? 3 : 2), &err) != CD_OK) builder_fail(t.n->loc, t.path);
         run.control = std::move(c);
     }
 

@@ -40,7 +40,7 @@ void cd_gripper_torques(const cd_model *m, cd_data *d)
     for (f = 0; f < m->nfinger; f++) {
         const double *P = m->finger_prm + 6 * f;
         int adr = m->finger_jnt_adr[f], n = m->finger_jnt_n[f], released = d->finger_mode[f] == CD_CLUTCH_RELEASED;
-        double th = schedule(m, f, d->t), load = -HUGE_VAL;
+        double th = schedule(m, f, d->t - d->finger_t0[f]), load = -HUGE_VAL; /* t0: data.h */
         d->finger_theta[f] = th;
         for (j = 0; j < n; j++) {
             int b = m->fjnt_body[adr + j];

@@ -70,7 +70,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(lim_mode, m->nlim); CARVE(lim_depth, m->nlim); CARVE(lim_force, m->nlim); CARVE(lim_raw, m->nlim);
     CARVE(fric_mode, m->nfric); CARVE(fric_dir, m->nfric); CARVE(fric_force, m->nfric);
     CARVE(finger_mode, m->nfinger); CARVE(finger_brake, m->nfinger); CARVE(finger_load, m->nfinger);
-    CARVE(finger_theta, m->nfinger);
+    CARVE(finger_theta, m->nfinger); CARVE(finger_t0, m->nfinger);
     CARVE(sw_tswitch, m->nsw); CARVE(sw_nswitch, m->nsw); CARVE(sw_held, m->nsw);
     CARVE(act_piece, m->nu);
     CARVE(ev, d ? d->ev_cap : 0);
@@ -195,6 +195,7 @@ cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
     for (k = 0; k < m->nfinger; k++) {
         d->finger_mode[k] = CD_CLUTCH_ENGAGED;
         d->finger_brake[k] = 0;
+        d->finger_t0[k] = 0;
     }
     for (k = 0; k < m->nsw; k++) {
         d->sw_tswitch[k] = -HUGE_VAL;

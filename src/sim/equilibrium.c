@@ -137,8 +137,8 @@ static cd_status free_jacobian(const cd_model *m, cd_data *d, const eq_ctx *c, d
 cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
 {
     const double fd_h = 1e-8;     /* [m | rad] finite-difference step: load/stiffness is ~1e-9..1e-4 */
-    const int max_it = 30;
-    int n = m->nv, i, j, it, np = 0;
+    const int max_it = 30, max_pass = 8;
+    int n = m->nv, i, j, it, np = 0, pass, tot = 0;
     size_t words = (size_t)(6 * n * n + 10 * n + m->ny + 10 * m->nslot + m->nlim + 2 * m->nfric + 16);
     double *w = d->allocator.alloc(words * sizeof(double), d->allocator.ctx);
     double *J, *V, *S, *work, *r, *r1, *delta, *dx, *save, scale, res = HUGE_VAL;
@@ -169,77 +169,92 @@ cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err)
     for (i = 0; i < n; i++) if (fabs(r[i]) > scale) scale = fabs(r[i]);
     if (cd_v3_norm(m->gravity) > scale) scale = cd_v3_norm(m->gravity);
     if (!(scale > 0)) goto out; /* nothing pushes: already in equilibrium */
-    for (it = 0; it < max_it; it++) {
-        gsl_matrix_view Jm, Vm;
-        gsl_vector_view Sv, wv, rv, xv;
-        double smax;
-        int k, ii;
-        if ((st = fd_jacobian(m, d, &c, delta, r, r1, J, fd_h)) != CD_OK) goto out;
-        if (it == 0) {
-            /* the degrees of freedom the closed contacts, stops and frictions
-             * hold: those whose column changes when they are all let go (a
-             * spring, an actuator or gravity alone does not make a DoF take part) */
-            double cmax = 0;
-            if ((st = free_jacobian(m, d, &c, delta, r1, V, fd_h, save)) != CD_OK) goto out;
-            for (j = 0; j < n; j++) {
-                double cn = 0, ca = 0;
-                for (i = 0; i < n; i++) {
-                    double dd = J[i * n + j] - V[i * n + j];
-                    cn += dd * dd;
-                    ca += J[i * n + j] * J[i * n + j];
+    /* Contacts are one-sided: a settled contact that pulls (f_n < 0: it
+     * touched at the given pose, the settle moved it out) is opened and the
+     * settle goes on without it (an active set; at most max_pass passes).
+     * Kept closed, it would open at the first step of the run, and the pull
+     * the balance relied on would be gone: the system creeps to another
+     * equilibrium (a squeezed grasp did, by 0.1 mm: tests/test_capture.c). */
+    for (pass = 0; pass < max_pass; pass++) {
+        int nopen = 0;
+        for (it = 0; it < max_it; it++) {
+            gsl_matrix_view Jm, Vm;
+            gsl_vector_view Sv, wv, rv, xv;
+            double smax;
+            int k, ii;
+            if ((st = fd_jacobian(m, d, &c, delta, r, r1, J, fd_h)) != CD_OK) goto out;
+            if (it == 0) {
+                /* the degrees of freedom the closed contacts, stops and frictions
+                 * hold: those whose column changes when they are all let go (a
+                 * spring, an actuator or gravity alone does not make a DoF take part) */
+                double cmax = 0;
+                if ((st = free_jacobian(m, d, &c, delta, r1, V, fd_h, save)) != CD_OK) goto out;
+                for (j = 0; j < n; j++) {
+                    double cn = 0, ca = 0;
+                    for (i = 0; i < n; i++) {
+                        double dd = J[i * n + j] - V[i * n + j];
+                        cn += dd * dd;
+                        ca += J[i * n + j] * J[i * n + j];
+                    }
+                    work[j] = sqrt(cn);
+                    if (sqrt(ca) > cmax) cmax = sqrt(ca);
                 }
-                work[j] = sqrt(cn);
-                if (sqrt(ca) > cmax) cmax = sqrt(ca);
+                np = 0;
+                for (j = 0; j < n; j++) { part[j] = work[j] > 1e-13 * cmax && cmax > 0; np += part[j]; }
+                if (np == 0) goto out;
             }
-            np = 0;
-            for (j = 0; j < n; j++) { part[j] = work[j] > 1e-13 * cmax && cmax > 0; np += part[j]; }
-            if (np == 0) goto out;
-        }
-        res = 0;
-        for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res) res = fabs(r[i]);
-        d->stats.eq_iterations = it + 1;
-        d->stats.eq_residual = res;
-        if (res <= 1e-14 * scale) break;
-        /* the participating block, compacted, solved by truncated SVD */
-        for (i = 0, ii = 0; i < n; i++) {
-            if (!part[i]) continue;
-            for (j = 0, k = 0; j < n; j++)
-                if (part[j]) V[ii * np + k++] = J[i * n + j];
-            r1[ii++] = -r[i];
-        }
-        Jm = gsl_matrix_view_array(V, (size_t)np, (size_t)np);
-        Vm = gsl_matrix_view_array(J, (size_t)np, (size_t)np);
-        Sv = gsl_vector_view_array(S, (size_t)np);
-        wv = gsl_vector_view_array(work, (size_t)np);
-        if (gsl_linalg_SV_decomp(&Jm.matrix, &Vm.matrix, &Sv.vector, &wv.vector) != GSL_SUCCESS) { st = CD_ENUMERIC; goto out; }
-        smax = S[0];
-        for (i = 0; i < np; i++) if (!(S[i] > 1e-12 * smax)) S[i] = 0.0;
-        rv = gsl_vector_view_array(r1, (size_t)np);
-        xv = gsl_vector_view_array(dx, (size_t)np);
-        if (gsl_linalg_SV_solve(&Jm.matrix, &Vm.matrix, &Sv.vector, &rv.vector, &xv.vector) != GSL_SUCCESS) {
-            st = CD_ENUMERIC;
-            goto out;
-        }
-        /* backtracking: a law with p_t > 1 has no tangential stiffness at zero
-         * deflection, so the first Newton steps can overshoot by far */
-        {
-            double res_new = HUGE_VAL, lam = 1.0;
-            int ls;
-            memcpy(r1, delta, (size_t)n * sizeof(double));
-            for (ls = 0; ls < 60; ls++, lam *= 0.5) {
-                for (i = n - 1, ii = np - 1; i >= 0; i--)
-                    if (part[i]) delta[i] = r1[i] + lam * dx[ii--];
-                if (residual(m, d, &c, delta, r) != CD_OK) continue;
-                res_new = 0;
-                for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res_new) res_new = fabs(r[i]);
-                if (res_new < res) break;
+            res = 0;
+            for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res) res = fabs(r[i]);
+            d->stats.eq_iterations = tot + it + 1;
+            d->stats.eq_residual = res;
+            if (res <= 1e-14 * scale) break;
+            /* the participating block, compacted, solved by truncated SVD */
+            for (i = 0, ii = 0; i < n; i++) {
+                if (!part[i]) continue;
+                for (j = 0, k = 0; j < n; j++)
+                    if (part[j]) V[ii * np + k++] = J[i * n + j];
+                r1[ii++] = -r[i];
             }
-            if (!(res_new < res)) { /* no progress: round-off floor reached */
-                memcpy(delta, r1, (size_t)n * sizeof(double));
-                if ((st = residual(m, d, &c, delta, r)) != CD_OK) goto out;
-                break;
+            Jm = gsl_matrix_view_array(V, (size_t)np, (size_t)np);
+            Vm = gsl_matrix_view_array(J, (size_t)np, (size_t)np);
+            Sv = gsl_vector_view_array(S, (size_t)np);
+            wv = gsl_vector_view_array(work, (size_t)np);
+            if (gsl_linalg_SV_decomp(&Jm.matrix, &Vm.matrix, &Sv.vector, &wv.vector) != GSL_SUCCESS) { st = CD_ENUMERIC; goto out; }
+            smax = S[0];
+            for (i = 0; i < np; i++) if (!(S[i] > 1e-12 * smax)) S[i] = 0.0;
+            rv = gsl_vector_view_array(r1, (size_t)np);
+            xv = gsl_vector_view_array(dx, (size_t)np);
+            if (gsl_linalg_SV_solve(&Jm.matrix, &Vm.matrix, &Sv.vector, &rv.vector, &xv.vector) != GSL_SUCCESS) {
+                st = CD_ENUMERIC;
+                goto out;
+            }
+            /* backtracking: a law with p_t > 1 has no tangential stiffness at zero
+             * deflection, so the first Newton steps can overshoot by far */
+            {
+                double res_new = HUGE_VAL, lam = 1.0;
+                int ls;
+                memcpy(r1, delta, (size_t)n * sizeof(double));
+                for (ls = 0; ls < 60; ls++, lam *= 0.5) {
+                    for (i = n - 1, ii = np - 1; i >= 0; i--)
+                        if (part[i]) delta[i] = r1[i] + lam * dx[ii--];
+                    if (residual(m, d, &c, delta, r) != CD_OK) continue;
+                    res_new = 0;
+                    for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res_new) res_new = fabs(r[i]);
+                    if (res_new < res) break;
+                }
+                if (!(res_new < res)) { /* no progress: round-off floor reached */
+                    memcpy(delta, r1, (size_t)n * sizeof(double));
+                    if ((st = residual(m, d, &c, delta, r)) != CD_OK) goto out;
+                    break;
+                }
             }
         }
+        tot += it < max_it ? it + 1 : max_it;
+        /* d holds the state at delta: open the contacts that pull */
+        for (i = 0; i < m->nslot; i++)
+            if (d->slot_mode[i] != CD_MODE_OPEN && d->slot_fn[i] < 0) { d->slot_mode[i] = CD_MODE_OPEN; nopen++; }
+        if (!nopen) break;
+        if ((st = residual(m, d, &c, delta, r)) != CD_OK) goto out;
     }
     res = 0;
     for (i = 0; i < n; i++) if (part[i] && fabs(r[i]) > res) res = fabs(r[i]);

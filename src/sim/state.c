@@ -28,6 +28,7 @@
     X(i, act_piece, m->nu)               \
     X(i, finger_mode, m->nfinger)        \
     X(d, finger_brake, m->nfinger)       \
+    X(d, finger_t0, m->nfinger)          \
     X(d, ctrl, m->nu)                    \
     X(d, qfrc_applied, m->nv)            \
     X(d, xfrc_applied, 6 * m->nbody)     \
