@@ -7,6 +7,7 @@
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
+#include "capture_util.h"
 
 #include <math.h>
 #include <string.h>
@@ -51,20 +52,10 @@ static void momentum_update(scen_run *r, double P0[3], double L0[3])
 static void scen_run_to(scen_run *r, const char *path, const char *const *ov, int nov, double t_end, int until_verdict)
 {
     cd_error err;
-    cd_monitor_opts mo;
     double P0[3], L0[3];
     long i;
     memset(r, 0, sizeof *r);
-    r->sc = cd_scenario_load(path, ov, nov, &err);
-    cr_assert_not_null(r->sc, "%s", err.msg);
-    cr_assert_not_null(r->sc->control, "%s has a [control] table", path);
-    r->d = cd_data_create(r->sc->model, 0, &err);
-    cr_assert_not_null(r->d, "%s", err.msg);
-    r->c = cd_ctrl_create(r->sc->model, r->sc->control, &err);
-    cr_assert_not_null(r->c, "%s", err.msg);
-    cd_ctrl_install(r->c, r->d);
-    mo = cd_scenario_monitor_opts(r->sc);
-    cr_assert_eq(cd_monitor_init(&r->mon, r->sc->model, r->d, &mo, &err), CD_OK, "%s", err.msg);
+    capture_open(path, ov, nov, &r->sc, &r->d, &r->c, &r->mon);
     momentum_update(r, P0, L0);
     while (r->d->t < t_end - 1e-12) {
         double tn = fmin(r->d->t + r->sc->output_dt, t_end);
