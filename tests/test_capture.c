@@ -245,6 +245,9 @@ Test(capture, detumbling_stops_the_held_target_at_the_grasp_limit, .timeout = 30
               w1 * 180 / M_PI, 1.0 - 0.7 / 132.4 * 180 / M_PI);
     cr_expect(f.w_rel * 180 / M_PI < 0.15, "relative rate at 3 s: %g deg/s", f.w_rel * 180 / M_PI);
     cr_expect(taumax <= r.sc->control->tau_max, "arm torque %g N m", taumax);
+    /* the figure of merit capture_tau_arm_max: the same samples (and t = 0) */
+    cr_expect(taumax > 0 && f.tau_arm_max >= taumax && f.tau_arm_max <= r.sc->control->tau_max,
+              "merit arm torque %g N m, sampled %g N m", f.tau_arm_max, taumax);
     cr_expect(ncontact >= 8, "%d contacts carry the target", ncontact);
     cr_log_info("detumbling: relative rate 1 deg/s -> %.4f deg/s at 1 s, %.4f deg/s at 3 s; %d contacts", w1 * 180 / M_PI,
                 f.w_rel * 180 / M_PI, ncontact);

@@ -147,6 +147,7 @@ typedef struct {
     double base_rate;       /* base angular speed at the last update [rad/s] */
     double v_rel, w_rel;    /* target relative to the chaser base at the last update: speed of the target's
                                CoM relative to the base's rigid motion [m/s], angular speed [rad/s] */
+    double tau_arm_max;     /* largest |torque| the controller applied to an arm joint, over the updates [N m] */
 } cd_ctrl_merit;
 /* Starts the figures of merit at d's current state (after cd_kinematics). */
 void cd_ctrl_merit_init(cd_ctrl_merit *f, const cd_ctrl *c, const cd_model *m, const cd_data *d);

@@ -99,6 +99,7 @@ typedef struct {
     double t_trigger;     /* [s] grasp trigger, NaN if none */
     double t_rigidise;    /* [s] trigger to the captured verdict, NaN if not captured */
     double v_rel_end, w_rel_end; /* target relative to the chaser base at the end [m/s], [rad/s] */
+    double tau_arm_max;   /* [N m] largest arm joint torque the controller applied, at the samples */
 } cd_h5_capture;
 void cd_h5_set_capture(cd_h5_writer *w, const cd_h5_capture *c);
 /* Writes the final statistics and run status, flushes and closes; frees w.

@@ -209,7 +209,7 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
                          pfn, ptau, nst + nsl, nst, nsl, off[0], off[1], off[2], eps, eps > 0 ? "" : " (no force closure)");
                 print_wrapped_kv(out, "", line);
                 { /* a [control] run's figures of merit (docs/capture.md) */
-                    double dP[3], dL[3], amax = NAN, rate = NAN, ttr = NAN, trig = NAN, vr = NAN, wr = NAN;
+                    double dP[3], dL[3], amax = NAN, rate = NAN, ttr = NAN, trig = NAN, vr = NAN, wr = NAN, tarm = NAN;
                     if (cd_h5r_attr_f64v(r, "/", "capture_dP", dP, 3) == 0 && cd_h5r_attr_f64v(r, "/", "capture_dL", dL, 3) == 0) {
                         cd_h5r_attr_f64(r, "/", "capture_base_angle_max", &amax);
                         cd_h5r_attr_f64(r, "/", "capture_base_rate_end", &rate);
@@ -217,12 +217,13 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
                         cd_h5r_attr_f64(r, "/", "capture_t_rigidise", &ttr);
                         cd_h5r_attr_f64(r, "/", "capture_v_rel_end", &vr);
                         cd_h5r_attr_f64(r, "/", "capture_w_rel_end", &wr);
+                        cd_h5r_attr_f64(r, "/", "capture_tau_arm_max", &tarm); /* NaN in files before it existed */
                         snprintf(line, sizeof line,
                                  "momentum to the chaser (%.4g, %.4g, %.4g) kg m/s, (%.4g, %.4g, %.4g) kg m^2/s; base "
                                  "attitude max %.4g deg, final rate %.4g deg/s; trigger at %.6g s, rigidised %.6g s later; "
-                                 "target relative to the base at the end %.4g m/s, %.4g deg/s",
+                                 "target relative to the base at the end %.4g m/s, %.4g deg/s; peak arm joint torque %.4g N m",
                                  dP[0], dP[1], dP[2], dL[0], dL[1], dL[2], amax * 57.29577951308232, rate * 57.29577951308232, trig, ttr,
-                                 vr, wr * 57.29577951308232);
+                                 vr, wr * 57.29577951308232, tarm);
                         print_wrapped_kv(out, "", line);
                     }
                 }

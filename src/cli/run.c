@@ -256,6 +256,7 @@ void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_mer
         cap->t_rigidise = mon->verdict == CD_VERDICT_CAPTURED ? mon->t_capture - cap->t_trigger : NAN;
         cap->v_rel_end = merit->v_rel;
         cap->w_rel_end = merit->w_rel;
+        cap->tau_arm_max = merit->tau_arm_max;
     }
 }
 

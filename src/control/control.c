@@ -491,13 +491,17 @@ void cd_ctrl_merit_init(cd_ctrl_merit *f, const cd_ctrl *c, const cd_model *m, c
 
 void cd_ctrl_merit_update(cd_ctrl_merit *f, const cd_ctrl *c, const cd_model *m, const cd_data *d)
 {
-    int b0 = m->sys_body_adr[c->c.sys], tb = m->sys_body_adr[f->target];
+    int b0 = m->sys_body_adr[c->c.sys], tb = m->sys_body_adr[f->target], i;
     double P[3], L[3], a = cd_ctrl_base_angle(c, m, d), r[3], v[3];
     cd_momentum(m, d, c->c.sys, NULL, P, NULL, L, NULL);
     cd_v3_sub(f->dP, P, f->P0);
     cd_v3_sub(f->dL, L, f->L0);
     if (a > f->base_angle_max) f->base_angle_max = a;
     f->base_rate = cd_v3_norm(d->body_w + 3 * b0);
+    for (i = 0; i < c->na; i++) { /* the controller's arm torques (control: qfrc_applied) */
+        double t = fabs(d->qfrc_applied[m->body_dof[c->arm[i]]]);
+        if (t > f->tau_arm_max) f->tau_arm_max = t;
+    }
     /* the target's CoM velocity against the base's rigid motion there */
     cd_v3_sub(r, d->body_c + 3 * tb, d->body_c + 3 * b0);
     cd_v3_cross(v, d->body_w + 3 * b0, r);

@@ -1013,6 +1013,7 @@ static int write_capture_attrs(hid_t f, const cd_h5_capture *c, int control)
         rc |= attr_f64(f, "capture_t_rigidise", c ? c->t_rigidise : NAN);
         rc |= attr_f64(f, "capture_v_rel_end", c ? c->v_rel_end : NAN);
         rc |= attr_f64(f, "capture_w_rel_end", c ? c->w_rel_end : NAN);
+        rc |= attr_f64(f, "capture_tau_arm_max", c ? c->tau_arm_max : NAN);
     }
     rc |= attr_str_fixed(f, "capture_verdict", c ? c->verdict : "", 16);
     rc |= attr_f64(f, "capture_t", c ? c->t : NAN);
