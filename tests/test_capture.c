@@ -70,16 +70,15 @@ Test(capture, too_fast_target_escapes, .timeout = 300) { verdict_of("scenarios/c
 /* The whole system's linear momentum and angular momentum (about the world
  * origin) through approach, impacts, stick-slip and the grasp, with the
  * attitude control (the only external torque) off: conserved to 1e-9 of the
- * largest momentum either body carries. */
-Test(capture, momentum_of_chaser_and_target_is_conserved, .timeout = 300)
+ * largest momentum either body carries. Returns the run's clutch events. */
+static long momentum_through_capture(const char *const *ov, int nov, const char *what)
 {
-    const char *ov[] = {"control.attitude.on=false", "simulation.duration=3.4"};
     run_t r;
     const cd_model *m;
     double P0[3], L0[3], dP = 0, dL = 0, Pmax = 0, Lmax = 0;
     int s, k;
-    long nev_contact = 0, i;
-    run_open(&r, HANDRAIL, ov, 2);
+    long nev_contact = 0, nev_clutch = 0, i;
+    run_open(&r, HANDRAIL, ov, nov);
     m = r.sc->model;
     for (;;) {
         double P[3] = {0, 0, 0}, L[3] = {0, 0, 0}, e[3];
@@ -103,15 +102,33 @@ Test(capture, momentum_of_chaser_and_target_is_conserved, .timeout = 300)
     for (i = 0; i < (r.d->ev_count < r.d->ev_cap ? r.d->ev_count : r.d->ev_cap); i++) {
         const cd_event *ev = cd_data_event(r.d, i);
         if (ev->kind == CD_EV_ONSET || ev->kind == CD_EV_STICK_SLIP || ev->kind == CD_EV_SLIP_STICK) nev_contact++;
+        if (ev->kind == CD_EV_CLUTCH) nev_clutch++;
     }
-    cr_expect(nev_contact >= 10 && cd_ctrl_phase_of(r.c, r.d) == CD_CTRL_HOLD, "contact events %ld, phase %d", nev_contact,
-              cd_ctrl_phase_of(r.c, r.d));
-    cr_expect(Pmax > 0.1 && Lmax > 1.0, "momenta exchanged: |P| %g, |L| %g", Pmax, Lmax);
-    cr_expect(dP <= 1e-9 * Pmax, "linear momentum drift %g kg m/s, %g relative", dP, dP / Pmax);
-    cr_expect(dL <= 1e-9 * Lmax, "angular momentum drift %g kg m^2/s, %g relative", dL, dL / Lmax);
-    cr_log_info("capture momentum: |dP| %.3g (%.3g relative to %.4g), |dL| %.3g (%.3g relative to %.4g)", dP,
-                dP / Pmax, Pmax, dL, dL / Lmax, Lmax);
+    cr_expect(nev_contact >= 10 && cd_ctrl_phase_of(r.c, r.d) == CD_CTRL_HOLD, "%s: contact events %ld, phase %d", what,
+              nev_contact, cd_ctrl_phase_of(r.c, r.d));
+    cr_expect(Pmax > 0.1 && Lmax > 1.0, "%s: momenta exchanged: |P| %g, |L| %g", what, Pmax, Lmax);
+    cr_expect(dP <= 1e-9 * Pmax, "%s: linear momentum drift %g kg m/s, %g relative", what, dP, dP / Pmax);
+    cr_expect(dL <= 1e-9 * Lmax, "%s: angular momentum drift %g kg m^2/s, %g relative", what, dL, dL / Lmax);
+    cr_log_info("%s: momentum |dP| %.3g (%.3g relative to %.4g), |dL| %.3g (%.3g relative to %.4g); %ld contact and %ld "
+                "clutch events", what, dP, dP / Pmax, Pmax, dL, dL / Lmax, Lmax, nev_contact, nev_clutch);
     run_close(&r);
+    return nev_clutch;
+}
+
+Test(capture, momentum_of_chaser_and_target_is_conserved, .timeout = 300)
+{
+    const char *ov[] = {"control.attitude.on=false", "simulation.duration=3.4"};
+    momentum_through_capture(ov, 2, "soft gripper");
+}
+
+/* The same with a Space Gripper closed by the trigger: its clutches release
+ * on the bar (located events) during the capture. */
+Test(capture, momentum_is_conserved_through_the_space_grippers_clutch_events, .timeout = 300)
+{
+    const char *ov[] = {"control.attitude.on=false", "simulation.duration=3.4", "gripper.type=\"space\"",
+                        "gripper.clutch={ threshold = 0.5, wire_stiffness = 20.0, torque_limit = 1.0 }"};
+    long nclutch = momentum_through_capture(ov, 4, "space gripper");
+    cr_expect(nclutch >= 1, "%ld clutch events", nclutch);
 }
 
 /* A non-tumbling target at rest in the closed hand (fingers closed to
