@@ -190,7 +190,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
     if (!s->locator) {
         /* a retry at the same start (the last step was rejected) renews an old Jacobian */
         int retry = s->have_prev && s->t_prev == t;
-        if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE || (retry && w->jac_t != t))
+        if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE || (CD_ROSW_RENEW_ON_RETRY && retry && w->jac_t != t))
             if (jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
         s->have_prev = 1;
         s->t_prev = t;

@@ -10,7 +10,14 @@
  * W-method stays of order 3 with any approximate Jacobian). */
 #define CD_ROSW_MAX_SLOTS 96
 /* Accepted steps a Jacobian is kept before it is recomputed. */
+#ifndef CD_ROSW_JAC_AGE
 #define CD_ROSW_JAC_AGE 20
+#endif
+/* 1: a step retried after a rejection renews a Jacobian formed earlier; 0
+ * keeps it (a build-time trial, docs/performance.md: -DCD_ROSW_RENEW_ON_RETRY=0). */
+#ifndef CD_ROSW_RENEW_ON_RETRY
+#define CD_ROSW_RENEW_ON_RETRY 1
+#endif
 
 typedef struct {
     const cd_model *m;        /* set for the duration of one call (as the integrator's) */
