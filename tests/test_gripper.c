@@ -580,3 +580,74 @@ Test(gripper, three_finger_enclosure_is_the_region_of_palm_and_fingers)
     cr_expect(!enclosed_at(0, 0, 0.0, 0.2, 0.0), "ball beyond the open fingertips (0.17 m)");
     cr_expect(!enclosed_at(0, 0, 0.045, 0.1, 0.04), "ball outside the open fingers' prism");
 }
+
+/* A Space Gripper that starts open (issue 9's region maps): the fingers'
+ * base joints at their -30 deg stop, the tips straight at theirs (no
+ * hyperextension), one stop pair per link. The wires are rigged at that
+ * pose: the coupling pulls nothing at t = 0 (|tau| < 1e-15 N m, not the
+ * 20 N m/rad x 0.52 rad it would pull toward 0), and every joint turns by
+ * theta_s(t) from its own initial angle, the two joints of a finger alike:
+ * after 0.3 s of closing in free space (no contact) each joint lags
+ * q0_j + theta_s by the wire's steady lag D_w w / K_w (0.0212 rad; the
+ * closed form of a rigid finger on a ramp, test above) within 2e-4 rad (1 %:
+ * the two joints' inertias are coupled), and the clutch has not fired (its
+ * load, the links' inertia only, stays below the 0.25 N m threshold). */
+Test(gripper, an_open_space_hand_closes_from_its_rigged_pose)
+{
+    const char *sets[3] = {"gripper.finger_joint.q0_deg=[-30.0, 0.0]",
+                           "gripper.finger_joint.limit_deg=[[-30.0, 120.0], [0.0, 120.0]]",
+                           "target.object.position=[0.0, 0.6, 0.0]"};
+    cd_scenario *sc = load_gripper(sets, 3);
+    const cd_model *m = sc->model;
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e);
+    int f, j, n;
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_forward(m, d), CD_OK);
+    for (f = 0; f < m->nfinger; f++)
+        for (j = 0; j < m->finger_jnt_n[f]; j++) {
+            int b = m->fjnt_body[m->finger_jnt_adr[f] + j];
+            double lo = j == 0 ? -30.0 : 0.0;
+            cr_expect_lt(fabs(m->body_limit[6 * b] - lo * M_PI / 180), 1e-15, "finger %d joint %d lower stop", f, j);
+            cr_expect_lt(fabs(m->body_limit[6 * b + 1] - 120.0 * M_PI / 180), 1e-15, "finger %d joint %d upper stop", f, j);
+            cr_expect_lt(fabs(d->qfrc_actuator[m->body_dof[b]]), 1e-15, "finger %d joint %d: %.3g N m at t = 0", f, j,
+                         d->qfrc_actuator[m->body_dof[b]]);
+        }
+    cr_assert_eq(cd_sim_advance(m, d, 0.3, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_expect_null(first_kind(d, CD_EV_CLUTCH, &n), "no clutch without a load");
+    for (f = 0; f < m->nfinger; f++)
+        for (j = 0; j < m->finger_jnt_n[f]; j++) {
+            int b = m->fjnt_body[m->finger_jnt_adr[f] + j];
+            const double *P = m->finger_prm + 6 * f;
+            double turned = cd_joint_q(m, d, b) - m->body_q0[b], lag = P[1] * (110.0 * M_PI / 180) / P[0];
+            cr_expect_lt(fabs(d->finger_theta[f] - turned - lag), 2e-4, "finger %d joint %d turned %.6g rad, theta_s %.6g, lag %.6g",
+                         f, j, turned, d->finger_theta[f], lag);
+        }
+    cd_data_free(d);
+    cd_scenario_free(sc);
+}
+
+/* Per-link stops: one clear message for a wrong count, a reversed pair, an
+ * initial angle outside its stops. */
+Test(gripper, per_link_finger_stops_are_checked)
+{
+    static const struct { const char *set[2]; const char *needle; } cases[] = {
+        {{"gripper.finger_joint.limit_deg=[[-30.0, 120.0]]", NULL}, "expected [lower, upper] or 2 such pairs"},
+        {{"gripper.finger_joint.limit_deg=[[-30.0, 120.0], [10.0, 0.0]]", NULL}, "expected lower < upper"},
+        {{"gripper.finger_joint.limit_deg=[[-30.0, 120.0], [5.0, 120.0]]", NULL}, "q0_deg defaults to 0, link 1: 0 deg, stops [5, 120]"},
+        {{"gripper.finger_joint.limit_deg=[[0.0, 120.0], [0.0, 120.0]]", "gripper.finger_joint.q0_deg=[-10.0, 0.0]"},
+         "expected initial angles within limit_deg (link 0: -10 deg"},
+    };
+    size_t i;
+    for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+        char p[1024];
+        cd_error e;
+        const char *r = getenv("CAPDYN_ROOT");
+        cd_scenario *sc;
+        snprintf(p, sizeof p, "%s/tests/data/scenarios/gripper_space.toml", r ? r : ".");
+        sc = cd_scenario_load(p, cases[i].set, cases[i].set[1] ? 2 : 1, &e);
+        cr_expect_null(sc, "case %zu accepted", i);
+        if (sc) cd_scenario_free(sc);
+        else cr_expect(strstr(e.msg, cases[i].needle) != NULL, "case %zu: %s", i, e.msg);
+    }
+}

@@ -207,7 +207,7 @@ typedef struct {
     cd_finger_type type;
     int njoint;
     const int *joint_body;/* (njoint) joint bodies, base to tip (copied) */
-    const double *sync;   /* (njoint) schedule gains: joint j follows sync_j theta_s (NULL: all 1) */
+    const double *sync;   /* (njoint) schedule gains: joint j follows q0_j + sync_j theta_s, q0_j its initial angle (NULL: all 1) */
     const double *ratio;  /* (njoint) equal-pressure split after the clutch (NULL: (n - j)^2, j = 0 base) */
     double wire_K, wire_D;/* coupling stiffness [N m/rad] (> 0) and damping [N m s/rad] (>= 0) */
     double threshold;     /* clutch load [N m] (> 0): the largest joint coupling torque */

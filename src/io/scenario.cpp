@@ -1719,6 +1719,9 @@ struct Builder {
         cd_joint_props fjp = cd_joint_props_default();
         bool fj_any = false;
         std::vector<double> fq0;       /* initial finger joint angles, base to tip */
+        std::vector<double> flim;      /* stops [lower, upper]: one pair for all joints, or one per link */
+        const Node *flim_node = nullptr;
+        bool flim_per_link = false;
         const Node *fq0_node = nullptr;
         if (Entry *e = t.get("finger_joint")) {
             std::string fp = t.kp("finger_joint");
@@ -1726,13 +1729,22 @@ struct Builder {
             fjp.stiffness = ft.num("spring", 0.0, Range::NonNeg);
             fjp.damping = ft.num("damping", 0.0, Range::NonNeg);
             if (Entry *l = ft.get("limit_deg")) {
-                double lim[2];
-                vec_of(*l->val, ft.kp("limit_deg"), 2, lim, Range::Any, "an array [lower, upper]");
-                if (!(lim[0] <= 0 && 0 <= lim[1] && lim[0] < lim[1]))
-                    fail_at(l->val->loc, ft.kp("limit_deg"), "expected lower <= 0 <= upper, lower < upper (the fingers start straight), got " + render(*l->val));
+                /* [lower, upper] for every joint, or one such pair per finger link */
+                const Node &ln = *l->val;
+                std::string lp = ft.kp("limit_deg");
+                bool per_link = ln.kind == NK::Array && !ln.arr.empty() && ln.arr[0]->kind == NK::Array;
+                for (size_t i = 0; i < (per_link ? ln.arr.size() : 1); i++) {
+                    double lim[2];
+                    const Node &pn = per_link ? *ln.arr[i] : ln;
+                    std::string pp = per_link ? idx(lp, i) : lp;
+                    vec_of(pn, pp, 2, lim, Range::Any, per_link ? "a pair [lower, upper]" : "an array [lower, upper] or one such pair per finger link");
+                    if (!(lim[0] < lim[1])) fail_at(pn.loc, pp, "expected lower < upper, got " + render(pn));
+                    flim.push_back(lim[0] * DEG);
+                    flim.push_back(lim[1] * DEG);
+                }
+                flim_node = &ln;
+                flim_per_link = per_link;
                 fjp.limited = 1;
-                fjp.lower = lim[0] * DEG;
-                fjp.upper = lim[1] * DEG;
             }
             if (Entry *q = ft.get("q0_deg")) {
                 const Node &qn = *q->val;
@@ -1814,8 +1826,18 @@ struct Builder {
                     if (fq0.size() != L.size())
                         fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected " + std::to_string(L.size()) + " angles (one per finger link), got " + render(*fq0_node));
                     d.q0 = fq0[j];
-                    if (fjp.limited && (d.q0 < fjp.lower - 1e-12 || d.q0 > fjp.upper + 1e-12))
-                        fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected angles within limit_deg, got " + render(*fq0_node));
+                }
+                if (fjp.limited) {
+                    if (flim_per_link && flim.size() != 2 * L.size())
+                        fail_at(flim_node->loc, t.kp("finger_joint") + ".limit_deg", "expected [lower, upper] or " + std::to_string(L.size()) + " such pairs (one per finger link), got " + render(*flim_node));
+                    size_t k = flim_per_link ? 2 * j : 0;
+                    fjp.lower = flim[k];
+                    fjp.upper = flim[k + 1];
+                    if (d.q0 < fjp.lower - 1e-12 || d.q0 > fjp.upper + 1e-12)
+                        fail_at(fq0_node ? fq0_node->loc : flim_node->loc, t.kp("finger_joint") + (fq0_node ? ".q0_deg" : ".limit_deg"),
+                                std::string("expected initial angles within limit_deg (") + (fq0_node ? "" : "q0_deg defaults to 0, ") + "link " + std::to_string(j) + ": " +
+                                    fmt_num(d.q0 / DEG) + " deg, stops [" + fmt_num(fjp.lower / DEG) + ", " + fmt_num(fjp.upper / DEG) + "]), got " +
+                                    render(fq0_node ? *fq0_node : *flim_node));
                 }
                 double It = M[j] * (3 * rad * rad + L[j] * L[j]) / 12.0, Ia = M[j] * rad * rad / 2;
                 memset(d.inertia, 0, sizeof d.inertia);

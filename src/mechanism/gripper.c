@@ -3,7 +3,9 @@
  *
  * Engaged, joint j of a finger follows the closing schedule through the
  * synchronising coupling, a stiff wire modelled as a spring-damper:
- *     tau_j = sat( K_w (sync_j theta_s(t) - q_j) - D_w qdot_j ),  |tau_j| <= torque_limit
+ *     tau_j = sat( K_w (q0_j + sync_j theta_s(t) - q_j) - D_w qdot_j ),  |tau_j| <= torque_limit
+ * (q0_j the joint's initial angle: the wires are rigged at the initial pose,
+ * so a hand that starts open, q0 != 0, is held there until the schedule runs)
  * The cross-routed wires of the Space Gripper make every joint turn with the
  * pulley; a kinematic constraint would need loop closure, which capdyn's
  * open-chain algorithm avoids on purpose (paper sec. 1): a stiff coupling is
@@ -46,7 +48,7 @@ void cd_gripper_torques(const cd_model *m, cd_data *d)
             int b = m->fjnt_body[adr + j];
             double q = cd_joint_q(m, d, b), qd = cd_joint_qd(m, d, b), tau;
             /* the coupling's torque, applied or (clutch out) only sensed */
-            double tc = P[0] * (m->fjnt_sync[adr + j] * th - q) - P[1] * qd;
+            double tc = P[0] * (m->body_q0[b] + m->fjnt_sync[adr + j] * th - q) - P[1] * qd;
             if (P[4] > 0 && tc > P[4]) tc = P[4];
             if (P[4] > 0 && tc < -P[4]) tc = -P[4];
             if (tc > load) load = tc;
