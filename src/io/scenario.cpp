@@ -1677,8 +1677,8 @@ struct Builder {
         if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
         if (!host && find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
         std::string preset = "two_opposed";
-        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120", "two_pairs"});
-        int nf = preset == "two_opposed" ? 2 : preset == "three_120" ? 3 : 4;
+        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120", "two_pairs", "two_interleaved"});
+        int nf = preset == "two_opposed" || preset == "two_interleaved" ? 2 : preset == "three_120" ? 3 : 4;
         /* palm */
         double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0}, Rp[9];
         cd_m3_identity(Rp);
@@ -1792,10 +1792,14 @@ struct Builder {
         /* two_pairs: two opposed pairs at z = -/+ pair_offset (a wide hand for a bar) */
         double zoff = 0;
         if (preset == "two_pairs") zoff = t.num("pair_offset", spacing / 2, Range::Pos);
-        else if (Entry *e = t.get("pair_offset")) fail_at(e->kloc, t.kp("pair_offset"), "applies to hand = 'two_pairs' only");
+        else if (preset == "two_interleaved") {
+            /* the two fingers in parallel planes z = -/+ pair_offset: they pass each other */
+            zoff = t.num("pair_offset", 1.5 * rad, Range::Pos);
+            if (!(zoff > rad)) fail_at(t.get("pair_offset")->val->loc, t.kp("pair_offset"), "expected more than the finger radius " + fmt_num(rad) + " m (the fingers must pass each other), got " + fmt_num(zoff));
+        } else if (Entry *e = t.get("pair_offset")) fail_at(e->kloc, t.kp("pair_offset"), "applies to hand = 'two_pairs' or 'two_interleaved' only");
         for (int row = 0; row < (preset == "two_pairs" ? 2 : 1); row++)
             for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
-                double pl[3] = {x, half[1] - rad, row == 0 ? -zoff : zoff}, p[3];
+                double pl[3] = {x, half[1] - rad, preset != "two_pairs" ? 0.0 : row == 0 ? -zoff : zoff}, p[3];
                 on_palm(pl, p);
                 if (cd_model_add_checkpoint(m.get(), attach, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
                 PB->ncp++;
@@ -1804,7 +1808,7 @@ struct Builder {
         std::vector<std::vector<int>> fingers(nf);
         for (int f = 0; f < nf; f++) {
             double phi = preset == "three_120" ? M_PI / 2 + 2 * M_PI * f / 3.0 : (f % 2 == 0 ? M_PI : 0.0);
-            double fz = preset == "two_pairs" ? (f < 2 ? -zoff : zoff) : 0.0;
+            double fz = preset == "two_pairs" ? (f < 2 ? -zoff : zoff) : preset == "two_interleaved" ? (f == 0 ? -zoff : zoff) : 0.0;
             /* radial direction e_r; the finger closes about e_r x y */
             double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {-er[2], 0, er[0]};
             int parent = attach;
@@ -1827,7 +1831,7 @@ struct Builder {
                         fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected " + std::to_string(L.size()) + " angles (one per finger link), got " + render(*fq0_node));
                     d.q0 = fq0[j];
                 }
-                if (fjp.limited) {
+                if (flim_node) {
                     if (flim_per_link && flim.size() != 2 * L.size())
                         fail_at(flim_node->loc, t.kp("finger_joint") + ".limit_deg", "expected [lower, upper] or " + std::to_string(L.size()) + " such pairs (one per finger link), got " + render(*flim_node));
                     size_t k = flim_per_link ? 2 * j : 0;

@@ -4,7 +4,8 @@
  * parallel axes (two opposed fingers), the object's centre of mass must lie
  * inside the polygon that runs up one finger (joint origins, then its tip:
  * the farthest check point of its last link), across, and down the other
- * fingers, closed by the palm between the finger bases. For other hands
+ * fingers, closed by the palm between the finger bases (nonzero winding:
+ * fingers that pass each other circle a wrapped bar twice). For other hands
  * (three fingers at 120 deg) in 3-D: the point must lie inside the convex
  * hull of the finger bases (the palm between them), every finger joint and
  * every fingertip: the region bounded by the palm and the fingers (GJK of
@@ -115,13 +116,20 @@ static void tip_of(const cd_model *m, const cd_data *d, int b, double tip[3])
     cd_v3_add(tip, d->body_x + 3 * b, t);
 }
 
+/* nonzero winding number of the closed polygon about (x, y): fingers that
+ * pass each other (hand = "two_interleaved") make the polygon cross itself,
+ * and a bar wrapped by both is circled twice, which the even-odd rule would
+ * call outside; for a simple polygon the two rules agree */
 static int in_polygon(const double (*p)[2], int n, double x, double y)
 {
-    int i, j, in = 0;
-    for (i = 0, j = n - 1; i < n; j = i++)
-        if ((p[i][1] > y) != (p[j][1] > y) && x < (p[j][0] - p[i][0]) * (y - p[i][1]) / (p[j][1] - p[i][1]) + p[i][0])
-            in = !in;
-    return in;
+    int i, j, w = 0;
+    for (i = 0, j = n - 1; i < n; j = i++) {
+        double cr = (p[i][0] - p[j][0]) * (y - p[j][1]) - (x - p[j][0]) * (p[i][1] - p[j][1]);
+        if (p[j][1] <= y) {
+            if (p[i][1] > y && cr > 0) w++;
+        } else if (p[i][1] <= y && cr < 0) w--;
+    }
+    return w != 0;
 }
 
 /* the point set of a three-finger hand and the tested point, for libccd */
