@@ -79,10 +79,10 @@ done
 REGION_L=0.15
 if [ -n "${CAPDYN_RUN_ARGS:-}" ]; then # a quick look: a 2x3 grid of shortened runs
     RX=${REGION_X:--0.006:0.006:2}
-    RY=${REGION_Y:-0.07:0.17:3}
+    RY=${REGION_Y:-0.07:0.19:3}
 else
     RX=${REGION_X:--0.006:0.006:5}
-    RY=${REGION_Y:-0.07:0.17:11}
+    RY=${REGION_Y:-0.07:0.21:8}
 fi
 read -r -a SWEEP_EXTRA <<< "${SWEEP_ARGS:-}"
 for g in tako space; do
