@@ -1131,3 +1131,32 @@ Test(cli, uncompressed_results_hold_the_same_samples)
     free(x[1]);
     rm_rf(dir);
 }
+
+/* An initial pose that overlaps (the region cylinder at x = 0.03 m, inside
+ * the right finger): capdyn check warns once on stderr, naming the deepest
+ * check point, both bodies and the depth (22.6 mm: the nearest check
+ * point, radius 8 mm, on the finger's axis at x = 0.05 m, is 20.4 mm from the
+ * cylinder's axis, radius 35 mm: 35 + 8 - 20.4), and
+ * still exits 0 (it is physics, not an error); the scenario as shipped gets
+ * no warning. */
+Test(cli, an_overlapping_initial_pose_is_warned_about)
+{
+    char dir[256], sc[512], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_vs_space_region.toml");
+    rc = capdyn(dir, &out, &err, "check", sc, "--set", "target.object.position=[0.03,0.08,0]", (char *)NULL);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(err && strstr(err, "warning") && strstr(err, "initial pose overlaps") && strstr(err, "'hand/f1_l0'") &&
+                  strstr(err, "'object/object'") && strstr(err, "22.6 mm"),
+              "stderr: %s", err ? err : "(none)");
+    free(out);
+    free(err);
+    out = err = NULL;
+    rc = capdyn(dir, &out, &err, "check", sc, (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect(!err || !strstr(err, "warning"), "stderr: %s", err);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}

@@ -24,6 +24,10 @@ int cli_count(const char *s, long *v);
 /* Seconds on a monotonic clock. */
 double cli_wall(void);
 
+/* check points deeper inside a shape than their radius at the data's state
+ * (an initial pose that overlaps); the deepest described in msg */
+#define CLI_OVERLAP_MIN 5e-3 /* [m] */
+int cli_initial_overlap(const cd_model *m, const cd_data *d, char *msg, size_t n);
 int cmd_run(int argc, char **argv);
 int cmd_check(int argc, char **argv);
 int cmd_info(int argc, char **argv);

@@ -204,6 +204,32 @@ static void print_budget(const cd_scenario *sc)
            sc->min_steps, sc->min_rhs_evals, rhs, wall);
 }
 
+/* A check point that starts deeper inside a shape than its own radius and
+ * than 5 mm (a heuristic: resting compliant contacts sit far shallower): the
+ * initial pose overlaps (an object placed inside a finger). The run is still
+ * physics (the first contact force is K x^p), but rarely what was meant.
+ * Writes the deepest such slot into msg; returns how many there are (cli.h). */
+int cli_initial_overlap(const cd_model *m, const cd_data *d, char *msg, size_t n)
+{
+    int k, worst = -1, count = 0;
+    for (k = 0; k < m->nslot; k++) {
+        int cp = m->slot_cp[k];
+        if (d->slot_x[k] > m->cp_radius[cp] && d->slot_x[k] > CLI_OVERLAP_MIN) {
+            count++;
+            if (worst < 0 || d->slot_x[k] - m->cp_radius[cp] > d->slot_x[worst] - m->cp_radius[m->slot_cp[worst]]) worst = k;
+        }
+    }
+    if (count && msg && n) {
+        int cp = m->slot_cp[worst], ba = m->cp_body[cp], bb = m->shape_body[m->slot_shape[worst]];
+        snprintf(msg, n,
+                 "at t = 0, %d check point%s start%s deeper inside a shape than their radius and 5 mm (the initial pose "
+                 "overlaps); the deepest: check point %d of '%s/%s' is %.3g mm inside a shape of '%s/%s' (radius %.3g mm)",
+                 count, count == 1 ? "" : "s", count == 1 ? "s" : "", cp, m->sys_name[m->body_sys[ba]], m->body_name[ba],
+                 1e3 * d->slot_x[worst], m->sys_name[m->body_sys[bb]], m->body_name[bb], 1e3 * m->cp_radius[cp]);
+    }
+    return count;
+}
+
 int cmd_check(int argc, char **argv)
 {
     run_opts o;
@@ -223,6 +249,12 @@ int cmd_check(int argc, char **argv)
     }
     m = sc->model;
     for (s = 0; s < m->nsys; s++) njoint += m->sys_nbody[s] - 1;
+    {   /* the initial pose: an object that starts inside a finger */
+        cd_data *d = cd_data_create(m, 0, &err);
+        char msg[512];
+        if (d && cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", o.scenario, msg);
+        cd_data_free(d);
+    }
     printf("%s: OK: '%s': %d system%s, %d bodies (%d joints), %d check points, %d shapes, %d contact slots, "
            "state size %d; %g s, output every %g s\n",
            o.scenario, sc->title ? sc->title : "", m->nsys, m->nsys == 1 ? "" : "s", m->nbody, njoint, m->ncp,
@@ -452,6 +484,10 @@ int cmd_run(int argc, char **argv)
         cli_error("%s", err.msg);
         cd_scenario_free(sc);
         return CLI_FAIL;
+    }
+    {
+        char msg[512];
+        if (cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", o.scenario, msg);
     }
     /* the scenario's built-in controller ([control], docs/capture.md) */
     if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
