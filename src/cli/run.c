@@ -222,12 +222,19 @@ int cli_initial_overlap(const cd_model *m, const cd_data *d, char *msg, size_t n
     if (count && msg && n) {
         int cp = m->slot_cp[worst], ba = m->cp_body[cp], bb = m->shape_body[m->slot_shape[worst]];
         snprintf(msg, n,
-                 "at t = 0, %d check point%s start%s deeper inside a shape than their radius and 5 mm (the initial pose "
+                 "at t = 0, %d check point%s start%s deeper inside a shape than their radius and %g mm (the initial pose "
                  "overlaps); the deepest: check point %d of '%s/%s' is %.3g mm inside a shape of '%s/%s' (radius %.3g mm)",
-                 count, count == 1 ? "" : "s", count == 1 ? "s" : "", cp, m->sys_name[m->body_sys[ba]], m->body_name[ba],
+                 count, count == 1 ? "" : "s", count == 1 ? "s" : "", 1e3 * CLI_OVERLAP_MIN, cp, m->sys_name[m->body_sys[ba]], m->body_name[ba],
                  1e3 * d->slot_x[worst], m->sys_name[m->body_sys[bb]], m->body_name[bb], 1e3 * m->cp_radius[cp]);
     }
     return count;
+}
+
+/* the warning of check and run: one line on stderr */
+static void warn_initial_overlap(const char *scenario, const cd_model *m, const cd_data *d)
+{
+    char msg[512];
+    if (cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", scenario, msg);
 }
 
 int cmd_check(int argc, char **argv)
@@ -251,8 +258,7 @@ int cmd_check(int argc, char **argv)
     for (s = 0; s < m->nsys; s++) njoint += m->sys_nbody[s] - 1;
     {   /* the initial pose: an object that starts inside a finger */
         cd_data *d = cd_data_create(m, 0, &err);
-        char msg[512];
-        if (d && cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", o.scenario, msg);
+        if (d) warn_initial_overlap(o.scenario, m, d);
         cd_data_free(d);
     }
     printf("%s: OK: '%s': %d system%s, %d bodies (%d joints), %d check points, %d shapes, %d contact slots, "
@@ -485,10 +491,7 @@ int cmd_run(int argc, char **argv)
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
-    {
-        char msg[512];
-        if (cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", o.scenario, msg);
-    }
+    warn_initial_overlap(o.scenario, m, d);
     /* the scenario's built-in controller ([control], docs/capture.md) */
     if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
         cli_error("%s: %s", o.scenario, err.msg);

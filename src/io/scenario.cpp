@@ -1742,6 +1742,8 @@ struct Builder {
                     flim.push_back(lim[0] * DEG);
                     flim.push_back(lim[1] * DEG);
                 }
+                if (per_link && flim.size() != 2 * L.size())
+                    fail_at(ln.loc, lp, "expected [lower, upper] or " + std::to_string(L.size()) + " such pairs (one per finger link), got " + render(ln));
                 flim_node = &ln;
                 flim_per_link = per_link;
                 fjp.limited = 1;
@@ -1832,8 +1834,6 @@ struct Builder {
                     d.q0 = fq0[j];
                 }
                 if (flim_node) {
-                    if (flim_per_link && flim.size() != 2 * L.size())
-                        fail_at(flim_node->loc, t.kp("finger_joint") + ".limit_deg", "expected [lower, upper] or " + std::to_string(L.size()) + " such pairs (one per finger link), got " + render(*flim_node));
                     size_t k = flim_per_link ? 2 * j : 0;
                     fjp.lower = flim[k];
                     fjp.upper = flim[k + 1];
