@@ -89,6 +89,9 @@ typedef enum {
     CD_STEP_NTYPES
 } cd_stepper;
 
+/* cd_options.jacobian */
+typedef enum { CD_JAC_MODEL = 0, CD_JAC_FD = 1 } cd_jacobian_kind;
+
 /* Name of a shape/stepper type ("plane", "rkf45", ...) and the reverse lookup
  * (returns -1 for an unknown name). */
 const char *cd_shape_type_name(cd_shape_type t);
@@ -112,6 +115,9 @@ typedef struct {
     double fd_eps;        /* relative finite-difference step of implicit steppers' Jacobian, default 1e-7 */
     long max_evals;       /* rhs-evaluation budget per cd_step / cd_sim_advance call (0 = none, default);
                              cd_step lands a located event early rather than exceed it (hard real time) */
+    int jacobian;         /* the linearly implicit stepper's Jacobian: CD_JAC_MODEL (default: assembled from
+                             the contact laws, joint elements and mass matrix, src/sim/jac.c) or CD_JAC_FD
+                             (forward differences on the active set, one evaluation per unknown) */
     int equilibrium_start;/* 1: at reset, contacts closed at t = 0 (and engaged joint stops) start in
                              static equilibrium (normal penetration and stick anchors preloaded by a
                              quasi-static settle); 0 (default): they start with zero tangential deflection */

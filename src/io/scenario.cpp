@@ -2399,7 +2399,7 @@ struct Builder {
             Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
             Tab t(&sn, "simulation",
                   {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
-                   "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
+                   "event_tol", "dwell", "v_reg", "fd_eps", "jacobian", "output_dt", "flush_every", "event_capacity",
                    "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
             cd_options &o = m->opt;
             run.duration = t.need_num("duration", Range::Pos);
@@ -2425,6 +2425,8 @@ struct Builder {
             o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
             o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
             o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
+            if (Entry *e = t.get("jacobian"))
+                o.jacobian = choice_of(*e->val, t.kp("jacobian"), {"model", "fd"}) == "fd" ? CD_JAC_FD : CD_JAC_MODEL;
             if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
             run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
             /* the sample count must be a sane integer (the CLI converts it) */

@@ -78,6 +78,7 @@ cd_options cd_options_default(void)
     o.v_reg = 1e-6;
     o.fd_eps = 1e-7;
     o.max_evals = 0;
+    o.jacobian = CD_JAC_MODEL;
     o.equilibrium_start = 0;
     return o;
 }
@@ -94,6 +95,10 @@ cd_status cd_options_check(const cd_options *o, cd_error *err)
         !(o->h_fixed > 0 && isfinite(o->h_fixed)) || o->max_steps < 1 || !(o->event_tol > 0) || !(o->dwell >= 0) ||
         !(o->v_reg > 0) || !(o->fd_eps > 0) || o->max_evals < 0 || (o->equilibrium_start != 0 && o->equilibrium_start != 1)) {
         seterr(err, CD_EINVAL, "integrator options out of range (steps, tolerances and budgets must be positive)");
+        return CD_EINVAL;
+    }
+    if (o->jacobian != CD_JAC_MODEL && o->jacobian != CD_JAC_FD) {
+        seterr(err, CD_EINVAL, "options: jacobian must be CD_JAC_MODEL (0) or CD_JAC_FD (1), got %d", o->jacobian);
         return CD_EINVAL;
     }
     return CD_OK;

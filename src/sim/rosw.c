@@ -35,7 +35,6 @@
 #include "../math/cd_math.h"
 
 #include <gsl/gsl_errno.h>
-#include <gsl/gsl_linalg.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdlib.h>
@@ -60,7 +59,8 @@ static int na_capacity(const cd_model *m)
 size_t cd_rosw_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
-    return 16 + (2 * na * na + 9 * n + na) * sizeof(double) + na * (sizeof(size_t) + sizeof(int)) + 16;
+    return 16 + (2 * na * na + 9 * n + na) * sizeof(double) + na * (sizeof(size_t) + sizeof(int)) + 16 +
+           cd_jacw_size(m, (int)na);
 }
 
 void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
@@ -81,8 +81,9 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
     w->fs = p; p += n;
     w->fd = p; p += n;
     w->r = p; p += n;   /* na <= ny entries used */
-    w->perm = (size_t *)(void *)p;
-    w->act = (int *)(void *)(w->perm + na);
+    w->perm = (int *)(void *)p;
+    w->act = w->perm + na;
+    cd_jacw_init(&w->jw, m, (int)na, (void *)(w->act + na));
 }
 
 void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; }
@@ -110,6 +111,10 @@ static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, con
     double eps = w->d->opt.fd_eps;
     active_set(w);
     na = w->na;
+    if (w->d->opt.jacobian == CD_JAC_MODEL) {
+        if (cd_jac_model(w->m, w->d, t, y, w->act, na, w->J, &w->jw) != CD_OK) return GSL_EBADFUNC;
+        goto done;
+    }
     memcpy(w->ytmp, y, (size_t)n * sizeof(double));
     for (c = 0; c < na; c++) {
         int j = w->act[c];
@@ -120,6 +125,7 @@ static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, con
         for (a = 0; a < na; a++) w->J[a * na + c] = (w->fd[w->act[a]] - f0[w->act[a]]) / h;
         w->ytmp[j] = y[j];
     }
+done:
     w->jac_ok = 1;
     w->lu_ok = 0;
     w->jac_t = t;
@@ -128,18 +134,64 @@ static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, con
     return GSL_SUCCESS;
 }
 
+/* In-place LU with partial pivoting of the row-major n x n matrix A (Doolittle,
+ * Golub & Van Loan alg. 3.4.1): no allocation, unlike gsl_linalg_LU_decomp,
+ * whose recursive blocked variant allocates. piv[k]: the row swapped with k.
+ * Returns -1 on a zero or non-finite pivot. */
+static int lu_decomp(double *A, int n, int *piv)
+{
+    int i, j, k;
+    for (k = 0; k < n; k++) {
+        int p = k;
+        double big = fabs(A[(size_t)k * n + k]), akk;
+        for (i = k + 1; i < n; i++)
+            if (fabs(A[(size_t)i * n + k]) > big) { big = fabs(A[(size_t)i * n + k]); p = i; }
+        piv[k] = p;
+        if (!(big > 0) || !isfinite(big)) return -1;
+        if (p != k)
+            for (j = 0; j < n; j++) {
+                double t = A[(size_t)k * n + j];
+                A[(size_t)k * n + j] = A[(size_t)p * n + j];
+                A[(size_t)p * n + j] = t;
+            }
+        akk = A[(size_t)k * n + k];
+        for (i = k + 1; i < n; i++) {
+            double *ri = A + (size_t)i * n, l = ri[k] / akk;
+            const double *rk = A + (size_t)k * n;
+            ri[k] = l;
+            if (l != 0)
+                for (j = k + 1; j < n; j++) ri[j] -= l * rk[j];
+        }
+    }
+    return 0;
+}
+
+static void lu_solve(const double *A, int n, const int *piv, double *b)
+{
+    int i, j;
+    for (i = 0; i < n; i++)
+        if (piv[i] != i) { double t = b[i]; b[i] = b[piv[i]]; b[piv[i]] = t; }
+    for (i = 1; i < n; i++) {
+        const double *ri = A + (size_t)i * n;
+        double s = b[i];
+        for (j = 0; j < i; j++) s -= ri[j] * b[j];
+        b[i] = s;
+    }
+    for (i = n - 1; i >= 0; i--) {
+        const double *ri = A + (size_t)i * n;
+        double s = b[i];
+        for (j = i + 1; j < n; j++) s -= ri[j] * b[j];
+        b[i] = s / ri[i];
+    }
+}
+
 static int factor(cd_rosw *w, double h)
 {
-    int na = w->na, i, s;
-    gsl_matrix_view W;
-    gsl_permutation P;
+    int na = w->na, i;
     for (i = 0; i < na * na; i++) w->W[i] = -h * GAM * w->J[i];
     for (i = 0; i < na; i++) w->W[i * na + i] += 1.0;
     if (na == 0) { w->lu_ok = 1; w->lu_h = h; return GSL_SUCCESS; }
-    W = gsl_matrix_view_array(w->W, (size_t)na, (size_t)na);
-    P.size = (size_t)na;
-    P.data = w->perm;
-    if (gsl_linalg_LU_decomp(&W.matrix, &P, &s) != GSL_SUCCESS) return GSL_FAILURE;
+    if (lu_decomp(w->W, na, w->perm) != 0) return GSL_FAILURE;
     for (i = 0; i < na; i++)
         if (!(fabs(w->W[i * na + i]) > 0) || !isfinite(w->W[i * na + i])) return GSL_FAILURE;
     w->lu_ok = 1;
@@ -150,12 +202,8 @@ static int factor(cd_rosw *w, double h)
 /* r <- (I - h gamma J)^-1 r on the active set (the LU of factor) */
 static int solve_active(cd_rosw *w, double *r)
 {
-    gsl_matrix_view W = gsl_matrix_view_array(w->W, (size_t)w->na, (size_t)w->na);
-    gsl_vector_view v = gsl_vector_view_array(r, (size_t)w->na);
-    gsl_permutation P;
-    P.size = (size_t)w->na;
-    P.data = w->perm;
-    return gsl_linalg_LU_svx(&W.matrix, &P, &v.vector) == GSL_SUCCESS ? GSL_SUCCESS : GSL_FAILURE;
+    lu_solve(w->W, w->na, w->perm, r);
+    return GSL_SUCCESS;
 }
 
 typedef struct {

@@ -2,6 +2,7 @@
 #ifndef CD_ROSW_H
 #define CD_ROSW_H
 #include "capdyn/sim.h"
+#include "jac.h"
 #include <gsl/gsl_odeiv2.h>
 #include <stddef.h>
 
@@ -25,11 +26,12 @@ typedef struct {
     int ny, na_max, na;       /* state size; active unknowns: capacity, current */
     int *act;                 /* (na_max) their indices in y */
     double *J, *W;            /* (na_max^2) Jacobian on the active set; iteration matrix, LU */
-    size_t *perm;             /* (na_max) */
+    int *perm;                /* (na_max) row interchanges of the LU */
     double *k[4], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny); r: (na_max) */
     int jac_ok, lu_ok;        /* J valid; W holds the LU of I - h gamma J for h = lu_h */
     double jac_t, lu_h;
     long jac_age;             /* accepted steps since J was computed */
+    cd_jacw jw;               /* work space of the structured Jacobian (opt.jacobian = CD_JAC_MODEL) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
