@@ -77,10 +77,12 @@ typedef struct {
 /* Integrator and event statistics, cumulative since cd_data_reset(). */
 typedef struct {
     long nrhs;            /* right-hand-side evaluations */
+    long nrhs_reused;     /* end-of-step evaluations saved: the stepper's last one was at the same (t, y) */
     long nsteps;          /* accepted steps */
     long nrejected;       /* rejected trial steps (adaptive) */
     long nevents;         /* events located */
     long nlocate_steps;   /* fixed steps spent locating events */
+    long nlocate_interp;  /* event-locating iterations on the step's Hermite interpolant (one evaluation each) */
     long nwarn_geom;      /* bad libccd answers */
     long nwarn_dwell;     /* switches deferred by the dwell rule */
     long nwarn_budget;    /* events landed early because the per-call evaluation budget ran out */

@@ -57,6 +57,11 @@
  * input (settle_modes: <= 5), the step (4), the located event's bracket start
  * (1) and the reserve. Breakpoints inside the step split it (4 more each). */
 #define CD_STEP_MIN_EVALS (5 + 4 + 1 + CD_BUDGET_RESERVE)
+/* The stepper's last evaluation stands for the end state after the
+ * quaternions' renormalisation when each |q| was within this of 1: every
+ * use of a quaternion (kinematics, outputs) divides by |q|, so the two
+ * states describe one configuration, to round-off. */
+#define CD_QUAT_SAME 1e-8
 
 typedef struct {
     const cd_model *m;        /* set for the duration of one call only: the data keeps no model pointer */
@@ -66,6 +71,9 @@ typedef struct {
     gsl_odeiv2_step *loc;     /* rk8pd one-step locator (adaptive modes; NULL in fixed mode) */
     double *y0, *ylo, *yhi, *yerr, *fd_f0, *fd_y;
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
+    double *f0s, *f1s;        /* f at the start and the end of the step an event is located in (the Hermite cubic) */
+    double *ylast, tlast;     /* the state of rhs's last evaluation (d's outputs are those of it) */
+    int last_valid;           /* ylast/tlast describe d's outputs (no direct cd_forward since) */
     double *in_snap;          /* inputs at the end of the last call */
     double *y_end;            /* y at the end of the last call */
     int nin;                  /* inputs: nu + nv + 12 nbody + nuser (user modes) */
@@ -99,8 +107,11 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     d->y = save;
     d->t = tsave;
     d->stats.nrhs++;
-    if (st != CD_OK) return GSL_EBADFUNC;
+    if (st != CD_OK) { I->last_valid = 0; return GSL_EBADFUNC; }
     memcpy(dydt, d->ydot, (size_t)I->m->ny * sizeof(double));
+    memcpy(I->ylast, y, (size_t)I->m->ny * sizeof(double));
+    I->tlast = t;
+    I->last_valid = 1;
     return GSL_SUCCESS;
 }
 
@@ -140,8 +151,8 @@ void cd_integ_free(void *p)
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
-    /* the struct, then 13 n + nin doubles, then the ros34pw2 buffers */
-    return sizeof(cd_integ) + 16 + (13 * n + nin + 1) * sizeof(double) +
+    /* the struct, then 16 n + nin doubles, then the ros34pw2 buffers */
+    return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
            (m->opt.stepper == CD_STEP_ROS34PW2 ? cd_rosw_size(m) : 0);
 }
 
@@ -156,6 +167,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->y0 = p; p += n; I->ylo = p; p += n; I->yhi = p; p += n; I->yerr = p; p += n;
     I->fd_f0 = p; p += n; I->fd_y = p; p += n; I->k1 = p; p += n; I->k2 = p; p += n;
     I->k3 = p; p += n; I->k4 = p; p += n; I->ytmp = p; p += n; I->y_end = p; p += n;
+    I->f0s = p; p += n; I->f1s = p; p += n; I->ylast = p; p += n;
     I->in_snap = p;
     p += nin;
     I->nin = (int)nin;
@@ -233,6 +245,27 @@ static void renormalize(const cd_model *m, cd_data *d)
         if (n > 0) { x.quat[0] /= n; x.quat[1] /= n; x.quat[2] /= n; x.quat[3] /= n; }
         d->stats.nrenorm++;
     }
+}
+
+/* ya and yb are equal but for the scale of the quaternions (|q_a| within
+ * CD_QUAT_SAME of 1, q_b = q_a / |q_a|): one configuration */
+static int same_configuration(const cd_model *m, const double *ya, const double *yb)
+{
+    int s, i, from = 0;
+    for (s = 0; s < m->nsys; s++) {
+        int q = m->sys_y_adr[s] + 3;
+        double n2 = 0, c;
+        if (m->sys_base_type[s] != CD_BASE_FREE) continue;
+        if (memcmp(ya + from, yb + from, (size_t)(q - from) * sizeof(double)) != 0) return 0;
+        for (i = 0; i < 4; i++) n2 += ya[q + i] * ya[q + i];
+        if (!(fabs(sqrt(n2) - 1.0) <= CD_QUAT_SAME)) return 0;
+        for (i = 0; i < 4; i++) {
+            c = ya[q + i] / sqrt(n2);
+            if (fabs(c - yb[q + i]) > 4e-16) return 0;
+        }
+        from = q + 4;
+    }
+    return memcmp(ya + from, yb + from, (size_t)(m->ny - from) * sizeof(double)) == 0;
 }
 
 /* after a step or a landing: unit quaternions, exact prescribed coordinates */
@@ -416,44 +449,108 @@ static int budget_left(const cd_data *d, const cd_integ *I, long need)
     return d->opt.max_evals <= 0 || d->stats.nrhs - I->nrhs0 + need + CD_BUDGET_RESERVE <= d->opt.max_evals;
 }
 
+/* The cubic Hermite interpolant of the step (t0, y0, f0) -> (t0 + h, y1, f1)
+ * at t0 + tau into y, then cd_forward: g at an interpolated state costs one
+ * evaluation instead of a locator step. */
+static cd_status interp(const cd_model *m, cd_data *d, cd_integ *I, double t0, double h, double tau, double *y)
+{
+    double th = tau / h, a0 = (1 + 2 * th) * (1 - th) * (1 - th), a1 = th * th * (3 - 2 * th);
+    double b0 = tau * (1 - th) * (1 - th), b1 = -tau * th * (1 - th);
+    int i;
+    cd_status st;
+    for (i = 0; i < m->ny; i++) y[i] = a0 * I->y0[i] + a1 * I->yhi[i] + b0 * I->f0s[i] + b1 * I->f1s[i];
+    d->y = y;
+    d->t = t0 + tau;
+    if (m->npresc) cd_prescribed_apply(m, d->t, y);
+    st = cd_forward(m, d);
+    d->stats.nrhs++;
+    d->stats.nlocate_interp++;
+    return st == CD_OK ? CD_OK : CD_ENUMERIC;
+}
+
+/* Illinois (modified regula falsi) on the bracket [lo, hi] of g, on the
+ * interpolant (use_interp) or on locator steps from y0. Leaves the last
+ * real state of the upper end in I->yhi when !use_interp. */
+static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0, double h, int use_interp,
+                          double *lo, double *hi, double *glo, double *ghi)
+{
+    int side = 0, it;
+    cd_status st;
+    for (it = 0; it < 200 && *hi - *lo > d->opt.event_tol; it++) {
+        double tau, g, w = *hi - *lo;
+        if (!budget_left(d, I, use_interp ? 1 : trial_cost(I))) { d->stats.nwarn_budget++; break; }
+        /* Illinois: secant on the bracket, the stale end's value halved */
+        tau = (*glo - *ghi) != 0 ? *lo + *glo * w / (*glo - *ghi) : *lo + 0.5 * w;
+        if (!(tau > *lo + 0.01 * w && tau < *hi - 0.01 * w)) tau = *lo + 0.5 * w;
+        if (it % 4 == 3) tau = *lo + 0.5 * w; /* a bisection now and then bounds the worst case */
+        st = use_interp ? interp(m, d, I, t0, h, tau, I->ylo) : trial(m, d, I, t0, tau, I->ylo);
+        if (st != CD_OK) return st;
+        g = gmin(m, d, 1, NULL);
+        if (g < 0) {
+            *hi = tau; *ghi = g;
+            if (!use_interp) memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
+            if (side == -1) *glo *= 0.5;
+            side = -1;
+        } else {
+            *lo = tau; *glo = g;
+            if (side == 1) *ghi *= 0.5;
+            side = 1;
+        }
+    }
+    return CD_OK;
+}
+
 /* Locate the first zero of gmin in (t0, t1] given gmin(t0) >= 0 > gmin(t1),
- * and leave d at the upper end of the final bracket (on the new side). */
+ * and leave d at the upper end of the final bracket (on the new side).
+ *
+ * Adaptive steppers first narrow the bracket on the step's cubic Hermite
+ * interpolant (one evaluation per iteration), then certify it with two
+ * locator steps from y0: the integrator's own solution must be on the old
+ * side at the lower end and on the new side at the upper end, as without
+ * the interpolant; where it is not (the interpolant's error moved the
+ * crossing), the Illinois iterations go on with locator steps from the
+ * bracket that is certified. So the located state is always the
+ * integrator's own solution, the bracket at most event_tol wide. */
 static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
                         int *trigger)
 {
     double h = t1 - t0, lo = 0.0, hi = h, glo, ghi = g_hi, *ystate = d->y;
-    int side = 0, it;
     cd_status st;
-    /* g at the start (modes unchanged) */
+    /* the end of the step and its derivative (d was evaluated there) */
     memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
+    memcpy(I->f1s, d->ydot, (size_t)m->ny * sizeof(double));
+    /* g at the start (modes unchanged) */
     d->y = I->y0;
     d->t = t0;
     st = cd_forward(m, d);
     d->stats.nrhs++;
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
+    memcpy(I->f0s, d->ydot, (size_t)m->ny * sizeof(double));
     glo = gmin(m, d, 1, NULL);
     if (!(glo > 0)) glo = 0.0;
-    for (it = 0; it < 200 && hi - lo > d->opt.event_tol; it++) {
-        double tau, g, w = hi - lo;
-        if (!budget_left(d, I, trial_cost(I))) { d->stats.nwarn_budget++; break; }
-        /* Illinois: secant on the bracket, the stale end's value halved */
-        tau = (glo - ghi) != 0 ? lo + glo * w / (glo - ghi) : lo + 0.5 * w;
-        if (!(tau > lo + 0.01 * w && tau < hi - 0.01 * w)) tau = lo + 0.5 * w;
-        if (it % 4 == 3) tau = lo + 0.5 * w; /* a bisection now and then bounds the worst case */
-        st = trial(m, d, I, t0, tau, I->ylo);
+    if (!I->fixed) {
+        double ilo = lo, ihi = hi, iglo = glo, ighi = ghi, g;
+        st = illinois(m, d, I, t0, h, 1, &ilo, &ihi, &iglo, &ighi);
         if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-        g = gmin(m, d, 1, NULL);
-        if (g < 0) {
-            hi = tau; ghi = g;
-            memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
-            if (side == -1) glo *= 0.5;
-            side = -1;
-        } else {
-            lo = tau; glo = g;
-            if (side == 1) ghi *= 0.5;
-            side = 1;
+        /* certify the upper end with the integrator's own step */
+        if (ihi < hi && budget_left(d, I, trial_cost(I))) {
+            st = trial(m, d, I, t0, ihi, I->ylo);
+            if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
+            g = gmin(m, d, 1, NULL);
+            if (g < 0) { hi = ihi; ghi = g; memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double)); }
+            else { lo = ihi; glo = g; }
+        }
+        /* and the lower end, if the upper one held */
+        if (hi == ihi && ilo > lo && budget_left(d, I, trial_cost(I))) {
+            st = trial(m, d, I, t0, ilo, I->ylo);
+            if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
+            g = gmin(m, d, 1, NULL);
+            if (g >= 0) { lo = ilo; glo = g; }
+            else { hi = ilo; ghi = g; memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double)); }
         }
     }
+    st = illinois(m, d, I, t0, h, 0, &lo, &hi, &glo, &ghi);
+    if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     /* land at the upper end (exactly at the step's end if the bracket never moved) */
     d->y = ystate;
     memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
@@ -647,6 +744,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             /* a step that would end within round-off of t1 would leave a sliver
              * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
             if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
+            I->last_valid = 0;
             status = gsl_odeiv2_evolve_apply(I->drv->e, I->drv->c, I->drv->s, &I->sys, &t, t1, &I->h, d->y);
             d->stats.nrejected += (long)I->drv->e->failed_steps - before;
             attempts += 1 + (long)I->drv->e->failed_steps - before;
@@ -667,9 +765,18 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         d->stats.h_last = d->t - t0;
         if (d->stats.h_last < d->stats.h_min_seen && d->t < t1) d->stats.h_min_seen = d->stats.h_last;
         if (d->stats.h_last > d->stats.h_max_seen) d->stats.h_max_seen = d->stats.h_last;
-        /* evaluate the end state: outputs and switching functions */
-        st = cd_forward(m, d);
-        d->stats.nrhs++;
+        /* evaluate the end state: outputs and switching functions. The
+         * adaptive steppers' last evaluation is usually f(t1, y1) (their
+         * dydt_out): when it was at exactly this time and state (nothing
+         * renormalised or prescribed since), d's outputs are already those
+         * of the end state, bit for bit, and it is not repeated. */
+        if (!I->fixed && I->last_valid && I->tlast == d->t && same_configuration(m, I->ylast, d->y)) {
+            st = CD_OK;
+            d->stats.nrhs_reused++;
+        } else {
+            st = cd_forward(m, d);
+            d->stats.nrhs++;
+        }
         if (st != CD_OK) {
             restore_start(m, d, I, t0, d->y);
             seterr(err, CD_ENUMERIC, "non-finite state after a step", t0);
