@@ -86,6 +86,8 @@ typedef enum {
     CD_STEP_RKF45 = 0, CD_STEP_RKCK, CD_STEP_RK8PD, CD_STEP_RK4IMP, CD_STEP_MSBDF,
     CD_STEP_RK4_FIXED,     /* classic RK4 with fixed step h_fixed (embedding mode) */
     CD_STEP_ROS34PW2,      /* linearly implicit Rosenbrock-W, order 3(2), L-stable: stiff contact (src/sim/rosw.c) */
+    CD_STEP_AUTO,          /* rk8pd while the problem is not stiff, ros34pw2 while it is: the switch is decided by
+                              the spectral radius of the structured Jacobian against the step (src/sim/integrator.c) */
     CD_STEP_NTYPES
 } cd_stepper;
 
@@ -101,7 +103,7 @@ int cd_stepper_from_name(const char *name);
 
 /* ---- integration options --------------------------------------------------- */
 typedef struct {
-    cd_stepper stepper;   /* default rk8pd */
+    cd_stepper stepper;   /* default CD_STEP_AUTO */
     double rtol;          /* relative tolerance, default 1e-9 */
     double atol;          /* absolute tolerance, default 1e-12 */
     double h_init;        /* first trial step [s], default 1e-5 */

@@ -41,7 +41,7 @@ const char *cd_version(void) { return CD_VERSION_STRING; }
 static const char *shape_names[CD_SHAPE_NTYPES] = {
     "plane", "sphere", "box", "cylinder", "capsule", "convex"};
 static const char *stepper_names[CD_STEP_NTYPES] = {
-    "rkf45", "rkck", "rk8pd", "rk4imp", "msbdf", "rk4", "ros34pw2"};
+    "rkf45", "rkck", "rk8pd", "rk4imp", "msbdf", "rk4", "ros34pw2", "auto"};
 
 const char *cd_shape_type_name(cd_shape_type t)
 { return (t >= 0 && t < CD_SHAPE_NTYPES) ? shape_names[t] : "?"; }
@@ -65,7 +65,7 @@ int cd_stepper_from_name(const char *name)
 cd_options cd_options_default(void)
 {
     cd_options o;
-    o.stepper = CD_STEP_RK8PD;
+    o.stepper = CD_STEP_AUTO;
     o.rtol = 1e-9;
     o.atol = 1e-12;
     o.h_init = 1e-5;

@@ -48,6 +48,19 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* auto (CD_STEP_AUTO): the stiffness check runs every CD_AUTO_EVERY
+ * accepted steps. With rho the spectral radius of the Jacobian and h the
+ * step just taken, rk8pd is stability-capped near h rho ~ 5 (its stability
+ * region reaches about -5 on the real axis and +-5 on the imaginary one):
+ * at h rho > CD_AUTO_STIFF it is working at that cap, and the stiff stepper
+ * takes over. Back to rk8pd once it could take steps CD_AUTO_GAIN times
+ * those of the stiff stepper (min(h_max, CD_AUTO_STIFF / rho) > gain h): an
+ * rk8pd step costs 12-13 evaluations, a ros34pw2 step 4 and a factorisation.
+ * Two consecutive checks must agree (hysteresis). */
+#define CD_AUTO_EVERY 10
+#define CD_AUTO_STIFF 2.5
+#define CD_AUTO_GAIN 4.0
+
 /* Reserve of evaluations a located event needs after its iterations: the
  * landing (1), the zero-time mode cascade (settle_modes: at most 5) and, in
  * fixed-step mode, the rest of the step (one RK4 step from the event with
@@ -93,6 +106,12 @@ typedef struct {
     int fixed, history;       /* fixed-step mode; the stepper keeps a history (msbdf, rk4imp) */
     cd_stepper stepper;       /* the one the GSL objects were made for */
     cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
+    /* auto: drv->s and loc are rk8pd; the stiff pair below is ros34pw2 */
+    gsl_odeiv2_step *s_stiff, *loc_stiff;
+    int autom;                /* stepper is CD_STEP_AUTO */
+    int stiff;                /* auto: the stiff stepper is the current one */
+    int auto_hits;            /* consecutive checks that asked for the other stepper */
+    long auto_next;           /* accepted steps until the next stiffness check */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
@@ -144,8 +163,11 @@ void cd_integ_free(void *p)
     if (!I) return;
     if (I->drv) gsl_odeiv2_driver_free(I->drv);
     if (I->loc) gsl_odeiv2_step_free(I->loc);
+    if (I->s_stiff) gsl_odeiv2_step_free(I->s_stiff);
+    if (I->loc_stiff) gsl_odeiv2_step_free(I->loc_stiff);
     I->drv = NULL;
     I->loc = NULL;
+    I->s_stiff = I->loc_stiff = NULL;
 }
 
 size_t cd_integ_size(const cd_model *m)
@@ -153,7 +175,7 @@ size_t cd_integ_size(const cd_model *m)
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
     /* the struct, then 16 n + nin doubles, then the ros34pw2 buffers */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (m->opt.stepper == CD_STEP_ROS34PW2 ? cd_rosw_size(m) : 0);
+           (m->opt.stepper == CD_STEP_ROS34PW2 || m->opt.stepper == CD_STEP_AUTO ? cd_rosw_size(m) : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -179,7 +201,9 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->stepper = d->opt.stepper;
     I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
     /* steppers whose next step depends on more than (t, y): a snapshot is a restart point */
-    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP || d->opt.stepper == CD_STEP_ROS34PW2;
+    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP ||
+                 d->opt.stepper == CD_STEP_ROS34PW2 || d->opt.stepper == CD_STEP_AUTO;
+    I->autom = d->opt.stepper == CD_STEP_AUTO;
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
@@ -187,6 +211,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     case CD_STEP_RK4IMP: T = gsl_odeiv2_step_rk4imp; break;
     case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
     case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
+    case CD_STEP_AUTO: T = gsl_odeiv2_step_rk8pd; break;
     default: T = NULL; break;
     }
     if (!I->fixed) {
@@ -203,6 +228,14 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_rosw_bind(I->drv->s, &I->rw, 0);
             cd_rosw_bind(I->loc, &I->rw, 1);
         }
+        if (I->autom) {
+            I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
+            I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
+            if (!I->s_stiff || !I->loc_stiff) goto nomem;
+            cd_rosw_init(&I->rw, m, d, p + 1);
+            cd_rosw_bind(I->s_stiff, &I->rw, 0);
+            cd_rosw_bind(I->loc_stiff, &I->rw, 1);
+        }
     }
     return I;
 nomem:
@@ -214,6 +247,7 @@ nomem:
 static void restart(cd_data *d, cd_integ *I)
 {
     if (I->drv) gsl_odeiv2_driver_reset(I->drv);
+    if (I->s_stiff) gsl_odeiv2_step_reset(I->s_stiff);
     I->fsal = 0;
     d->stats.nrestart++;
 }
@@ -226,6 +260,10 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     I->hfix_set = d->opt.h_fixed;
     if (I->drv) gsl_odeiv2_driver_reset(I->drv);
     if (I->loc) gsl_odeiv2_step_reset(I->loc);
+    if (I->s_stiff) gsl_odeiv2_step_reset(I->s_stiff);
+    I->stiff = 0;
+    I->auto_hits = 0;
+    I->auto_next = 0;
     I->have_end = 0;
     I->fsal = 0;
     I->restart_pending = 0;
@@ -409,9 +447,10 @@ static int rk4_step(cd_integ *I, double t, double h, double *y, int use_fsal)
  * fixed-step mode) of length h from (t, y), y updated in place. */
 static int one_step(cd_integ *I, double t, double h, double *y)
 {
+    gsl_odeiv2_step *loc = I->stiff ? I->loc_stiff : I->loc;
     if (I->fixed) return rk4_step(I, t, h, y, 0);
-    gsl_odeiv2_step_reset(I->loc);
-    return gsl_odeiv2_step_apply(I->loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
+    gsl_odeiv2_step_reset(loc);
+    return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
 /* One locator step of length tau from (t0, y0) into y; then cd_forward. */
@@ -442,7 +481,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 }
 
 /* evaluations one more locator iteration costs (its stages and the forward) */
-static long trial_cost(const cd_integ *I) { return I->fixed ? 5 : 14; }
+static long trial_cost(const cd_integ *I) { return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : 14; }
 
 static int budget_left(const cd_data *d, const cd_integ *I, long need)
 {
@@ -560,6 +599,55 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     (void)gmin(m, d, 1, trigger);
     return CD_OK;
+}
+
+/* auto: log the switch of stepper (an event of the integrator: mode 0
+ * rk8pd, 1 ros34pw2; x holds the step [s], fn the spectral radius [1/s]) */
+static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
+{
+    cd_event *e = &d->ev[d->ev_count % d->ev_cap];
+    memset(e, 0, sizeof *e);
+    e->t = d->t;
+    e->kind = CD_EV_STEPPER;
+    e->owner_kind = CD_OWNER_INTEGRATOR;
+    e->owner = 0;
+    e->slot = e->body_a = e->body_b = -1;
+    e->mode_from = I->stiff;
+    e->mode_to = to_stiff;
+    e->x = d->stats.h_last;
+    e->fn = rho;
+    d->ev_count++;
+    if (to_stiff) d->stats.nswitch_stiff++;
+    else d->stats.nswitch_explicit++;
+    I->stiff = to_stiff;
+    I->auto_hits = 0;
+    gsl_odeiv2_evolve_reset(I->drv->e);
+    gsl_odeiv2_step_reset(I->drv->s);
+    gsl_odeiv2_step_reset(I->s_stiff);
+    cd_rosw_invalidate(&I->rw);
+    I->fsal = 1; /* d was evaluated at the end of the step: outputs stay valid */
+    if (!to_stiff && rho > 0 && I->h > CD_AUTO_STIFF / rho) I->h = CD_AUTO_STIFF / rho;
+}
+
+/* auto: the stiffness check after an accepted step */
+static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
+{
+    double rho, h = d->stats.h_last, hmax = d->opt.h_max, reach;
+    int want;
+    (void)m;
+    if (--I->auto_next > 0) return;
+    I->auto_next = CD_AUTO_EVERY;
+    rho = cd_rosw_spectral_radius(&I->rw, d->t, d->y);
+    if (!(rho >= 0)) return;
+    if (!I->stiff) {
+        want = h * rho > CD_AUTO_STIFF;
+    } else {
+        reach = rho > 0 ? CD_AUTO_STIFF / rho : HUGE_VAL;
+        if (hmax > 0 && reach > hmax) reach = hmax;
+        want = reach > CD_AUTO_GAIN * h;
+    }
+    if (!want) { I->auto_hits = 0; return; }
+    if (++I->auto_hits >= 2) auto_switch(d, I, !I->stiff, rho);
 }
 
 static double next_dwell_end(const cd_model *m, const cd_data *d)
@@ -745,7 +833,8 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
              * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
             if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
             I->last_valid = 0;
-            status = gsl_odeiv2_evolve_apply(I->drv->e, I->drv->c, I->drv->s, &I->sys, &t, t1, &I->h, d->y);
+            status = gsl_odeiv2_evolve_apply(I->drv->e, I->drv->c, I->stiff ? I->s_stiff : I->drv->s, &I->sys, &t, t1,
+                                             &I->h, d->y);
             d->stats.nrejected += (long)I->drv->e->failed_steps - before;
             attempts += 1 + (long)I->drv->e->failed_steps - before;
             if (status == GSL_SUCCESS) d->t = t;
@@ -753,6 +842,22 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         I->fsal = 0;
         if (status != GSL_SUCCESS) {
             restore_start(m, d, I, t0, d->y);
+            /* A non-finite value inside a trial step whose start was finite:
+             * an explicit step far beyond its stability limit overflows in
+             * its stages. That is a step-size failure, not the model's: auto
+             * hands the step to the stiff stepper, any other adaptive stepper
+             * retries with a quarter of the step. A model that is non-finite
+             * at every step size still stops with CD_ENUMERIC once the trial
+             * step is below h_min. */
+            if (status == GSL_EBADFUNC && !I->fixed) {
+                d->stats.nrejected++;
+                attempts++;
+                restart(d, I);
+                if (I->autom && !I->stiff) auto_switch(d, I, 1, -1.0);
+                else I->h *= 0.25;
+                I->fsal = 0;
+                if (I->h >= d->opt.h_min && attempts < d->opt.max_steps) continue;
+            }
             if (status == GSL_EBADFUNC) {
                 seterr(err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
                 return CD_ENUMERIC;
@@ -815,6 +920,10 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                     d->stats.nwarn_geom++;
                     log_event(d, &ev);
                 }
+        }
+        if (I->autom) {
+            if (I->stiff) d->stats.t_stiff += d->stats.h_last;
+            auto_check(m, d, I);
         }
         if (!I->fixed && I->h < d->opt.h_min && d->t < t_end) {
             seterr(err, CD_ESTALL, "step size fell below h_min (stiff or discontinuous dynamics)", d->t);
@@ -886,7 +995,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 }
 
 /* ---- the integrator's part of the complete state ------------------------------ */
-#define INTEG_FIXED_WORDS 10
+#define INTEG_FIXED_WORDS 13
 
 int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody + m->nuser; }
 
@@ -898,6 +1007,7 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     if (I->history) I->restart_pending = 1;
     b[0] = I->h; b[1] = I->t_end; b[2] = I->step_t0; b[3] = I->step_h; b[4] = (double)I->step_k;
     b[5] = I->have_end; b[6] = I->fsal; b[7] = I->restart_pending; b[8] = I->rtol_set; b[9] = I->atol_set;
+    b[10] = I->stiff; b[11] = I->auto_hits; b[12] = (double)I->auto_next;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
@@ -907,6 +1017,7 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     cd_integ *I = (cd_integ *)d->integ;
     I->h = b[0]; I->t_end = b[1]; I->step_t0 = b[2]; I->step_h = b[3]; I->step_k = (long)b[4];
     I->have_end = (int)b[5]; I->fsal = (int)b[6]; I->restart_pending = (int)b[7];
+    I->stiff = I->autom && b[10] != 0; I->auto_hits = (int)b[11]; I->auto_next = (long)b[12];
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
     memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
     /* callbacks are this process's: the restored data keeps its own, unchanged */

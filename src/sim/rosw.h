@@ -32,6 +32,12 @@ typedef struct {
     double jac_t, lu_h;
     long jac_age;             /* accepted steps since J was computed */
     cd_jacw jw;               /* work space of the structured Jacobian (opt.jacobian = CD_JAC_MODEL) */
+    /* the reduced solve of a structured Jacobian (rosw.c, reduce()): the
+     * active unknowns split into positions P, velocities U and anchors Z */
+    int red, nP, nU, nZ;
+    int *iP, *iU, *iZ;        /* (na_max each) their places in the active set */
+    double *M2;               /* (na_max^2) J_UP J_PU + J_UZ J_ZU, nU x nU */
+    double *tu;               /* (na_max) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
@@ -40,6 +46,12 @@ size_t cd_rosw_size(const cd_model *m);
 void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem);
 /* The next step recomputes the Jacobian (a restart: modes, inputs or state changed). */
 void cd_rosw_invalidate(cd_rosw *w);
+
+/* Spectral radius of the right-hand side's Jacobian at (t, y) [1/s], by
+ * power iteration on the current Jacobian if valid, else on a structured one
+ * formed for it (one evaluation; the stepper's own is not replaced). -1 if
+ * the evaluation fails. Uses the stage buffers (between steps only). */
+double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y);
 
 /* The GSL stepper type. Each step object must be bound to the workspace;
  * a locator's steps share the Jacobian of the main stepper's step start and
