@@ -39,8 +39,6 @@ typedef enum {
     CD_EV_SCHEDULE,        /* an actuator's STEPS/TABLE row changed (owner: the actuator); waypoints
                               and clutch schedules end steps and restart the stepper, unlogged */
     CD_EV_CLUTCH,          /* a finger's clutch disengaged (load reached its threshold) or re-engaged (open) */
-    CD_EV_STEPPER,         /* integrator "auto": the stepper changed (mode 0 rk8pd, 1 ros34pw2; x = the step [s],
-                              fn = the Jacobian's spectral radius [1/s]); not a physical event, not in stats.nevents */
     CD_EV_NKINDS
 } cd_event_kind;
 
@@ -51,7 +49,6 @@ typedef enum {
     CD_OWNER_ACTUATOR,     /* owner = actuator (schedule step) */
     CD_OWNER_USER,         /* owner = user switch index */
     CD_OWNER_FINGER,       /* owner = clutched finger */
-    CD_OWNER_INTEGRATOR,   /* owner = the integrator (stepper switches of "auto"; owner 0) */
     CD_OWNER_NKINDS
 } cd_owner_kind;
 
@@ -83,6 +80,7 @@ typedef struct {
     long nswitch_stiff;   /* integrator "auto": switches to the stiff stepper (ros34pw2) */
     long nswitch_explicit;/* ... and back to the explicit one (rk8pd) */
     double t_stiff;       /* ... simulated time spent on the stiff stepper [s] */
+    double t_switch_last; /* ... time of the last switch [s] (-1: none) */
     long nrhs_reused;     /* end-of-step evaluations saved: the stepper's last one was at the same (t, y) */
     long nsteps;          /* accepted steps */
     long nrejected;       /* rejected trial steps (adaptive) */

@@ -236,8 +236,8 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
 
     /* integrator */
     {
-        long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0, nj = 0;
-        double rtol = 0, atol = 0, hmin = 0, hmax = 0;
+        long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0, nj = 0, nws = 0, nwe = 0;
+        double rtol = 0, atol = 0, hmin = 0, hmax = 0, tstiff = 0, tfin = 0;
         /* the closing statistics exist from the start (placeholders): final
          * once the run wrote its status */
         int final = status && strcmp(status, "running") != 0 && cd_h5r_attr_i64(r, "/", "stats_nsteps", &ns) == 0 &&
@@ -251,6 +251,10 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
             cd_h5r_attr_i64(r, "/", "stats_nwarn_dwell", &nd);
             cd_h5r_attr_i64(r, "/", "stats_nwarn_geom", &ng);
             cd_h5r_attr_i64(r, "/", "stats_njac", &nj); /* absent from files before it existed: stays 0 */
+            cd_h5r_attr_i64(r, "/", "stats_nswitch_stiff", &nws);
+            cd_h5r_attr_i64(r, "/", "stats_nswitch_explicit", &nwe);
+            cd_h5r_attr_f64(r, "/", "stats_t_stiff", &tstiff);
+            cd_h5r_attr_f64(r, "/", "t_final", &tfin);
             cd_h5r_attr_f64(r, "/", "stats_h_min", &hmin);
             cd_h5r_attr_f64(r, "/", "stats_h_max", &hmax);
             snprintf(line, sizeof line,
@@ -259,7 +263,13 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
                      stepper ? stepper : "?", rtol, atol, ns, nr, nf, nl, hmin, hmax);
             if (nj > 0) {
                 size_t len = strlen(line);
-                snprintf(line + len, sizeof line - len, "; %lld Jacobians (finite differences, in the evaluations)", nj);
+                snprintf(line + len, sizeof line - len, "; %lld Jacobians (in the evaluations)", nj);
+            }
+            if (stepper && strcmp(stepper, "auto") == 0 && nws >= 0 && nwe >= 0) {
+                size_t len = strlen(line);
+                snprintf(line + len, sizeof line - len,
+                         "; auto: %lld switches to ros34pw2 and %lld back to rk8pd, ros34pw2 for %.3g of %.3g s", nws, nwe,
+                         tstiff > 0 ? tstiff : 0.0, tfin);
             }
         } else if (n > 0) {
             double *a = cd_h5r_series(r, "/diagnostics/nsteps", NULL, &err);

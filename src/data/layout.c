@@ -7,8 +7,8 @@
 
 static const char *ev_names[CD_EV_NKINDS] = {
     "onset", "separation", "stick_slip", "slip_stick", "slip_turn", "geometry_failure",
-    "limit_engage", "limit_release", "user", "schedule", "clutch", "stepper"};
-static const char *owner_names[CD_OWNER_NKINDS] = {"slot", "joint", "actuator", "user", "finger", "integrator"};
+    "limit_engage", "limit_release", "user", "schedule", "clutch"};
+static const char *owner_names[CD_OWNER_NKINDS] = {"slot", "joint", "actuator", "user", "finger"};
 static const char *mode_names[3] = {"open", "stick", "slip"};
 
 const char *cd_event_kind_name(cd_event_kind k)

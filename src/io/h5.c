@@ -1052,6 +1052,9 @@ static int write_closing_attrs(hid_t f, const cd_data *d)
     rc |= attr_i64(f, "stats_nwarn_dwell", s ? s->nwarn_dwell : -1);
     rc |= attr_i64(f, "stats_nrenorm", s ? s->nrenorm : -1);
     rc |= attr_i64(f, "stats_njac", s ? s->njac : -1);
+    rc |= attr_i64(f, "stats_nswitch_stiff", s ? s->nswitch_stiff : -1);
+    rc |= attr_i64(f, "stats_nswitch_explicit", s ? s->nswitch_explicit : -1);
+    rc |= attr_f64(f, "stats_t_stiff", s ? s->t_stiff : NAN);
     rc |= attr_f64(f, "stats_h_last", s ? s->h_last : NAN);
     rc |= attr_f64(f, "stats_h_min", s ? (s->nsteps > 0 && isfinite(s->h_min_seen) ? s->h_min_seen : 0.0) : NAN);
     rc |= attr_f64(f, "stats_h_max", s ? s->h_max_seen : NAN);

@@ -206,6 +206,7 @@ cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
     d->ev_count = 0;
     memset(&d->stats, 0, sizeof d->stats);
     d->stats.h_min_seen = HUGE_VAL;
+    d->stats.t_switch_last = -1.0;
     cd_integ_reset(m, d);
     /* contacts and stops already closed at t = 0 start closed (docs/contact.md),
      * optionally preloaded to static equilibrium */

@@ -601,24 +601,13 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     return CD_OK;
 }
 
-/* auto: log the switch of stepper (an event of the integrator: mode 0
- * rk8pd, 1 ros34pw2; x holds the step [s], fn the spectral radius [1/s]) */
+/* auto: change stepper (counted in stats; not an event of the model: the
+ * event log holds physical switches only) */
 static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
 {
-    cd_event *e = &d->ev[d->ev_count % d->ev_cap];
-    memset(e, 0, sizeof *e);
-    e->t = d->t;
-    e->kind = CD_EV_STEPPER;
-    e->owner_kind = CD_OWNER_INTEGRATOR;
-    e->owner = 0;
-    e->slot = e->body_a = e->body_b = -1;
-    e->mode_from = I->stiff;
-    e->mode_to = to_stiff;
-    e->x = d->stats.h_last;
-    e->fn = rho;
-    d->ev_count++;
     if (to_stiff) d->stats.nswitch_stiff++;
     else d->stats.nswitch_explicit++;
+    d->stats.t_switch_last = d->t;
     I->stiff = to_stiff;
     I->auto_hits = 0;
     gsl_odeiv2_evolve_reset(I->drv->e);
@@ -632,7 +621,10 @@ static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
 /* auto: the stiffness check after an accepted step */
 static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
 {
-    double rho, h = d->stats.h_last, hmax = d->opt.h_max, reach;
+    /* the step the stepper works at: the last one, or its proposal for the
+     * next if larger (a step clipped by a sample, breakpoint or event is not
+     * the stepper's choice) */
+    double rho, h = d->stats.h_last > I->h ? d->stats.h_last : I->h, hmax = d->opt.h_max, reach;
     int want;
     (void)m;
     if (--I->auto_next > 0) return;
