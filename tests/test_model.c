@@ -737,7 +737,7 @@ Test(model, names_and_defaults)
         cr_expect(strlen(cd_status_string((cd_status)i)) > 0 && strcmp(cd_status_string((cd_status)i), "unknown status") != 0);
     cr_expect(strcmp(cd_version(), CD_VERSION_STRING) == 0);
     /* the defaults documented in include/capdyn/model.h */
-    cr_expect(o.stepper == CD_STEP_RK8PD && o.rtol == 1e-9 && o.atol == 1e-12 && o.h_init == 1e-5 &&
+    cr_expect(o.stepper == CD_STEP_AUTO && o.jacobian == CD_JAC_MODEL && o.rtol == 1e-9 && o.atol == 1e-12 && o.h_init == 1e-5 &&
               o.h_max == 1e-2 && o.h_min == 1e-14 && o.h_fixed == 1e-5 && o.max_steps == 100000000L &&
               o.event_tol == 1e-10 && o.dwell == 1e-7 && o.v_reg == 1e-6 && o.fd_eps == 1e-7);
 }
@@ -778,4 +778,20 @@ Test(model, options_edited_after_finalize_are_checked_at_data_creation)
     m->opt.h_fixed = HUGE_VAL;
     cr_expect(cd_data_create(m, 0, &e) == NULL, "an infinite fixed step is refused");
     cd_model_free(m);
+}
+
+/* issue 18: a relative tolerance double precision cannot meet is refused up
+ * front (a tick at rtol 1e-16 never returned), 0 (pure atol) and 1e-14 are not */
+Test(model, options_refuse_an_rtol_below_double_precision)
+{
+    cd_options o = cd_options_default();
+    cd_error e;
+    o.rtol = 1e-16;
+    cr_expect_eq(cd_options_check(&o, &e), CD_EINVAL);
+    cr_expect(strstr(e.msg, "rtol 1e-16") != NULL, "message names the value: %s", e.msg);
+    o.rtol = CD_RTOL_MIN;
+    cr_expect_eq(cd_options_check(&o, &e), CD_OK, "%s", e.msg);
+    o.rtol = 0;
+    o.atol = 1e-9;
+    cr_expect_eq(cd_options_check(&o, &e), CD_OK, "%s", e.msg);
 }

@@ -91,6 +91,10 @@ typedef enum {
     CD_STEP_NTYPES
 } cd_stepper;
 
+/* The smallest non-zero rtol cd_options_check accepts: about 64 ulps of 1.
+ * A tighter one cannot be met in double precision (the step collapses). */
+#define CD_RTOL_MIN 1e-14
+
 /* cd_options.jacobian */
 typedef enum { CD_JAC_MODEL = 0, CD_JAC_FD = 1 } cd_jacobian_kind;
 

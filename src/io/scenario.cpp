@@ -2410,6 +2410,10 @@ struct Builder {
                 o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
             }
             o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
+            if (o.rtol > 0 && o.rtol < CD_RTOL_MIN)
+                fail_at(t.get("rtol") ? t.get("rtol")->val->loc : sn.loc, t.kp("rtol"),
+                        "expected 0 or a value in [" + fmt_num(CD_RTOL_MIN) +
+                            ", inf) (a tighter relative tolerance cannot be met in double precision), got " + fmt_num(o.rtol));
             o.atol = t.num("atol", o.atol, Range::NonNeg);
             if (!(o.rtol + o.atol > 0))
                 fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");

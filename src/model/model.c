@@ -91,6 +91,12 @@ cd_status cd_options_check(const cd_options *o, cd_error *err)
         seterr(err, CD_EINVAL, "tolerances must be finite, >= 0 and not both zero (rtol %g, atol %g)", o->rtol, o->atol);
         return CD_EINVAL;
     }
+    if (o->rtol > 0 && o->rtol < CD_RTOL_MIN) {
+        /* below ~64 ulps of 1 no step can meet it: the step size collapses and a call never returns */
+        seterr(err, CD_EINVAL, "rtol %g is below %g, which double precision cannot meet (use 0 for a pure atol)",
+               o->rtol, CD_RTOL_MIN);
+        return CD_EINVAL;
+    }
     if (!(o->h_init > 0 && isfinite(o->h_init)) || !(o->h_max >= 0) || !(o->h_min >= 0) ||
         !(o->h_fixed > 0 && isfinite(o->h_fixed)) || o->max_steps < 1 || !(o->event_tol > 0) || !(o->dwell >= 0) ||
         !(o->v_reg > 0) || !(o->fd_eps > 0) || o->max_evals < 0 || (o->equilibrium_start != 0 && o->equilibrium_start != 1)) {
