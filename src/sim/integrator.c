@@ -57,10 +57,7 @@
  * it works at that cap. The choice is on cost: an rk8pd step costs 12-13
  * evaluations, a ros34pw2 step 4 plus its linear algebra, about
  * CD_AUTO_COST_RATIO times less. So
- *   rk8pd -> ros34pw2 when h rho > CD_AUTO_STIFF, unless ros34pw2 was seen
- *            (settled, in its last episode, within CD_AUTO_MEMORY steps) to
- *            need steps below h / CD_AUTO_COST_RATIO (its accuracy at a
- *            tight tolerance) at a stiffness as high as now;
+ *   rk8pd -> ros34pw2 when h rho > CD_AUTO_STIFF;
  *   ros34pw2 -> rk8pd when rk8pd could take min(h_max, CD_AUTO_STIFF / rho)
  *            > CD_AUTO_COST_RATIO h.
  * Two consecutive checks must agree. */
@@ -68,8 +65,6 @@
 #define CD_AUTO_EVERY_MAX 320
 #define CD_AUTO_STIFF 2.5
 #define CD_AUTO_COST_RATIO 2.0
-/* steps after which what ros34pw2 was seen to need is forgotten */
-#define CD_AUTO_MEMORY 500
 
 /* Reserve of evaluations a located event needs after its iterations: the
  * landing (1), the zero-time mode cascade (settle_modes: at most 5) and, in
@@ -124,7 +119,6 @@ typedef struct {
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled while the switches come fast) */
     long auto_since;          /* accepted steps since the last switch */
-    double h_stiff_seen, rho_seen; /* the stiff stepper's working step at its last check, and rho then */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
@@ -279,7 +273,6 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     I->auto_next = 0;
     I->auto_every = CD_AUTO_EVERY;
     I->auto_since = 0;
-    I->h_stiff_seen = I->rho_seen = 0;
     I->have_end = 0;
     I->fsal = 0;
     I->restart_pending = 0;
@@ -627,7 +620,6 @@ static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
     I->stiff = to_stiff;
     I->auto_hits = 0;
     I->auto_since = 0;
-    if (to_stiff) I->h_stiff_seen = 0; /* a new episode */
     gsl_odeiv2_evolve_reset(I->drv->e);
     gsl_odeiv2_step_reset(I->drv->s);
     gsl_odeiv2_step_reset(I->s_stiff);
@@ -653,16 +645,7 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
     if (!(rho >= 0)) return;
     if (!I->stiff) {
         want = h * rho > CD_AUTO_STIFF;
-        /* ros34pw2 was seen to need much shorter steps at this stiffness */
-        if (want && I->h_stiff_seen > 0 && I->auto_since < CD_AUTO_MEMORY && rho <= 4.0 * I->rho_seen &&
-            I->h_stiff_seen * CD_AUTO_COST_RATIO < h)
-            want = 0;
     } else {
-        /* its working step once settled (not the short steps right after a restart) */
-        if (I->auto_since >= 2 * CD_AUTO_EVERY) {
-            I->h_stiff_seen = h;
-            I->rho_seen = rho;
-        }
         reach = rho > 0 ? CD_AUTO_STIFF / rho : HUGE_VAL;
         if (hmax > 0 && reach > hmax) reach = hmax;
         want = reach > CD_AUTO_COST_RATIO * h;
@@ -1022,7 +1005,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 }
 
 /* ---- the integrator's part of the complete state ------------------------------ */
-#define INTEG_FIXED_WORDS 17
+#define INTEG_FIXED_WORDS 15
 
 int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody + m->nuser; }
 
@@ -1035,7 +1018,7 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     b[0] = I->h; b[1] = I->t_end; b[2] = I->step_t0; b[3] = I->step_h; b[4] = (double)I->step_k;
     b[5] = I->have_end; b[6] = I->fsal; b[7] = I->restart_pending; b[8] = I->rtol_set; b[9] = I->atol_set;
     b[10] = I->stiff; b[11] = I->auto_hits; b[12] = (double)I->auto_next;
-    b[13] = (double)I->auto_every; b[14] = (double)I->auto_since; b[15] = I->h_stiff_seen; b[16] = I->rho_seen;
+    b[13] = (double)I->auto_every; b[14] = (double)I->auto_since;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
@@ -1046,7 +1029,7 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     I->h = b[0]; I->t_end = b[1]; I->step_t0 = b[2]; I->step_h = b[3]; I->step_k = (long)b[4];
     I->have_end = (int)b[5]; I->fsal = (int)b[6]; I->restart_pending = (int)b[7];
     I->stiff = I->autom && b[10] != 0; I->auto_hits = (int)b[11]; I->auto_next = (long)b[12];
-    I->auto_every = (long)b[13]; I->auto_since = (long)b[14]; I->h_stiff_seen = b[15]; I->rho_seen = b[16];
+    I->auto_every = (long)b[13]; I->auto_since = (long)b[14];
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
     memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
     /* callbacks are this process's: the restored data keeps its own, unchanged */
