@@ -26,9 +26,9 @@ field() { # FILE KEY -> the rest of the summary line that starts with KEY
 
 summary() { # LOG -> verdict | events (physical) | evals | steps | wall | rtf
   local log=$1 verdict ev evals steps wall dur
-  verdict=$(field "$log" capture)
+  verdict=$(field "$log" capture | sed 's/^\(captured\|escaped\|unresolved\|caged\)\( at t = [0-9.e+-]* s\)\?.*/\1\2/')
   [ -n "$verdict" ] || verdict=$(field "$log" status)
-  ev=$(field "$log" events | sed 's/, stepper [0-9]*//')
+  ev=$(field "$log" events)
   evals=$(field "$log" integrator | sed -n 's/.* \([0-9]*\) rhs evaluations.*/\1/p')
   steps=$(field "$log" integrator | sed -n 's/.*: \([0-9]*\) steps.*/\1/p')
   wall=$(field "$log" "wall time" | sed 's/ s$//')

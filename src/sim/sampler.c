@@ -32,7 +32,7 @@ cd_sampler *cd_sampler_create(const cd_model *m, cd_error *err)
     cd_sampler *s = (cd_sampler *)calloc(1, sizeof *s);
     size_t n = (size_t)(m->ny ? m->ny : 1);
     if (!s) { cd_error_set(err, CD_ENOMEM, "sampler: out of memory"); return NULL; }
-    s->scratch = cd_data_create(m, 16, err);
+    s->scratch = cd_data_create(m, 256, err);
     s->ya = (double *)malloc(4 * n * sizeof(double));
     if (!s->scratch || !s->ya) {
         if (s->scratch && !s->ya) cd_error_set(err, CD_ENOMEM, "sampler: out of memory");
@@ -54,9 +54,27 @@ void cd_sampler_free(cd_sampler *s)
     free(s);
 }
 
+/* The scratch's event log mirrors the run's: a sample taken on the scratch
+ * carries the run's event count and its latest events, so a writer that
+ * appends "the events logged since the last sample" sees one log whichever
+ * data a sample comes from (a scratch log left at 0 read as a reset and
+ * made the next sample at a step's end write every event again). Copies only
+ * the events logged since the last call, the newest ev_cap of them. */
+static void sync_events(cd_sampler *s, const cd_data *d)
+{
+    cd_data *x = s->scratch;
+    long g, from = x->ev_count, oldest = d->ev_count > d->ev_cap ? d->ev_count - d->ev_cap : 0;
+    if (d->ev_count < from) from = 0; /* the run was reset */
+    if (from < oldest) from = oldest;
+    if (d->ev_count - from > x->ev_cap) from = d->ev_count - x->ev_cap;
+    for (g = from; g < d->ev_count; g++) x->ev[g % x->ev_cap] = d->ev[g % d->ev_cap];
+    x->ev_count = d->ev_count;
+}
+
 static void take_start(cd_sampler *s, const cd_model *m, const cd_data *d)
 {
     cd_state_copy_eval(m, s->scratch, d);
+    sync_events(s, d);
     memcpy(s->ya, d->y, (size_t)s->ny * sizeof(double));
     memcpy(s->fa, d->ydot, (size_t)s->ny * sizeof(double));
     s->ta = d->t;
