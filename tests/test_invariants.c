@@ -117,12 +117,76 @@ Test(invariants, no_allocation_in_steps_and_events)
         cr_expect_gt(d->stats.nevents, 0, "the scene must exercise events (%s)", cd_stepper_name(steppers[i]));
         cr_expect_eq(nalloc, 0, "%ld allocations during %ld steps with %s", nalloc, d->stats.nsteps,
                      cd_stepper_name(steppers[i]));
+
         cd_data_free(d);
         cd_model_free(m);
     }
 #else
     cr_skip_test("allocation counting needs glibc malloc (not under ASan)");
 #endif
+}
+
+/* A ball dropped 1 mm onto a fixed box, gravity on: the contact closes and
+ * stays (stiff: K = 1e5 N/m on 0.1 kg, D critical), so auto must switch to
+ * ros34pw2 and its switches, stiffness checks and stiff steps allocate
+ * nothing either. */
+static cd_model *resting_ball(void)
+{
+    cd_model *m = cd_model_create();
+    cd_error e;
+    cd_system_desc s = cd_system_desc_default();
+    cd_contact_law law = cd_contact_law_from_rule(1e4, 10, 0.1, 1.0, 0.5);
+    double half[3] = {0.5, 0.5, 0.05}, pos[3] = {0, 0, -0.05}, c0[3] = {0, 0, 0};
+    int ball, floor_, b, sh, lid;
+    s.name = "ball";
+    s.mass = 0.1;
+    s.pos[2] = 0.021; /* radius 0.02: 1 mm above the box's top face at z = 0 */
+    ball = cd_model_add_system(m, &s, &e);
+    b = m->sys_body_adr[ball];
+    cr_assert(cd_model_add_checkpoint(m, b, c0, 0.02, &e) >= 0, "%s", e.msg);
+    s = cd_system_desc_default();
+    s.name = "floor";
+    s.type = CD_BASE_FIXED;
+    floor_ = cd_model_add_system(m, &s, &e);
+    sh = cd_model_add_shape(m, m->sys_body_adr[floor_], CD_SHAPE_BOX, pos, NULL, half, NULL, 0, &e);
+    lid = cd_model_add_law(m, &law, &e);
+    cr_assert(cd_model_add_pair(m, ball, -1, sh, lid, &e) >= 0, "%s", e.msg);
+    m->gravity[0] = m->gravity[1] = 0;
+    m->gravity[2] = -9.81;
+    cr_assert(cd_model_finalize(m, &e) == CD_OK, "%s", e.msg);
+    m->opt.stepper = CD_STEP_AUTO;
+    m->opt.rtol = 1e-6;
+    m->opt.atol = 1e-9;
+    m->opt.h_max = 0.05;
+    return m;
+}
+
+Test(invariants, auto_switches_on_a_resting_contact_without_allocating)
+{
+    cd_model *m = resting_ball();
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e);
+    cd_status st;
+    cr_assert(d, "%s", e.msg);
+#if CD_COUNT_ALLOC
+    nalloc = 0;
+    counting = 1;
+#endif
+    st = cd_sim_advance(m, d, 1.0, NULL, NULL, &e);
+#if CD_COUNT_ALLOC
+    counting = 0;
+    cr_expect_eq(nalloc, 0, "%ld allocations in %ld steps", nalloc, d->stats.nsteps);
+#endif
+    cr_assert_eq(st, CD_OK, "%s", e.msg);
+    /* the ball rests: penetration m g / K within 1 % (K from the rule: 1e4 x 10) */
+    cr_expect_eq(d->slot_mode[0], CD_MODE_STICK);
+    cr_expect_lt(fabs(d->slot_x[0] - 0.1 * 9.81 / 1e5) / (0.1 * 9.81 / 1e5), 0.01, "penetration %g m", d->slot_x[0]);
+    cr_expect_gt(d->stats.nswitch_stiff, 0, "auto never switched to ros34pw2 on a resting stiff contact");
+    cr_expect_gt(d->stats.t_stiff, 0.5, "ros34pw2 for %g s of 1 s", d->stats.t_stiff);
+    cr_log_info("resting ball: %ld steps, %ld evaluations, %ld switches to stiff, %g s stiff", d->stats.nsteps,
+                d->stats.nrhs, d->stats.nswitch_stiff, d->stats.t_stiff);
+    cd_data_free(d);
+    cd_model_free(m);
 }
 
 Test(invariants, bit_identical_across_runs_and_data)

@@ -866,7 +866,11 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                 if (I->autom && !I->stiff) auto_switch(d, I, 1, -1.0);
                 else I->h *= 0.25;
                 I->fsal = 0;
-                if (I->h >= d->opt.h_min && attempts < d->opt.max_steps) continue;
+                if (I->h >= d->opt.h_min && attempts < d->opt.max_steps && budget_left(d, I, 0)) continue;
+                if (!budget_left(d, I, 0)) {
+                    seterr(err, CD_EBUDGET, "evaluation budget (max_evals) of this call spent", d->t);
+                    return CD_EBUDGET;
+                }
             }
             if (status == GSL_EBADFUNC) {
                 seterr(err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
