@@ -551,3 +551,101 @@ Test(build, a_link_without_check_points_is_refused)
     cr_expect_eq(m->nsys, 0);
     cd_model_free(m);
 }
+
+/* ---- the cost of a tumbling rate (issue 24) ------------------------------- */
+
+/* a free box tumbling at w about (1, 0, 1)/sqrt 2 (principal: about x), nothing else */
+static cd_model *spinning_box(double w, cd_stepper st, int principal)
+{
+    cd_model *m = cd_model_create();
+    cd_target_desc t = cd_target_desc_default();
+    cd_shape_desc s = cd_shape_desc_default();
+    cd_error err;
+    s.type = CD_SHAPE_BOX;
+    t.mass = 500.0;
+    t.inertia[0] = 100.0; t.inertia[4] = 150.0; t.inertia[8] = 200.0;
+    if (principal) t.angvel[0] = w;
+    else t.angvel[0] = t.angvel[2] = w / sqrt(2.0);
+    t.shapes = &s;
+    t.nshape = 1;
+    cr_assert(cd_build_target(m, &t, &err) >= 0, "%s", err.msg);
+    m->opt.stepper = st;
+    cr_assert_eq(cd_model_finalize(m, &err), CD_OK, "%s", err.msg);
+    return m;
+}
+
+/* the estimate is within a factor of 2 of the steps the stepper takes on a
+ * tumbling box (torque-free rotation at 1000 rad/s for 0.05 s: 50 rad), and
+ * 1 to 3 times them for a spin about a principal axis (steadier: larger steps) */
+Test(build, spin_step_estimate_is_within_a_factor_of_two)
+{
+    const cd_stepper st[3] = {CD_STEP_RK8PD, CD_STEP_RKF45, CD_STEP_RKCK};
+    int i;
+    for (i = 0; i < 3; i++) {
+        cd_model *m = spinning_box(1000.0, st[i], 0), *p = spinning_box(1000.0, st[i], 1);
+        cd_error err;
+        cd_data *d = cd_data_create(m, 0, &err), *dp = cd_data_create(p, 0, &err);
+        double w, est;
+        cr_assert_not_null(d, "%s", err.msg);
+        cr_assert_eq(cd_spin_steps(m, 0.05, &w, &est), 0);
+        cr_expect_float_eq(w, 1000.0, 1e-9);
+        cr_assert_eq(cd_sim_advance(m, d, 0.05, NULL, NULL, &err), CD_OK, "%s", err.msg);
+        cr_expect(est > 0.5 * d->stats.nsteps && est < 2.0 * d->stats.nsteps, "%s: estimate %g, steps taken %ld",
+                  cd_stepper_name(st[i]), est, d->stats.nsteps);
+        cr_assert_not_null(dp);
+        cr_assert_eq(cd_sim_advance(p, dp, 0.05, NULL, NULL, &err), CD_OK, "%s", err.msg);
+        cr_expect(est >= 1.0 * dp->stats.nsteps && est < 3.0 * dp->stats.nsteps, "%s, principal axis: estimate %g, steps taken %ld",
+                  cd_stepper_name(st[i]), est, dp->stats.nsteps);
+        cd_data_free(d);
+        cd_data_free(dp);
+        cd_model_free(m);
+        cd_model_free(p);
+    }
+    {   /* fixed steps: no estimate; at rest: none */
+        cd_model *m = spinning_box(1000.0, CD_STEP_RK4_FIXED, 0), *r = spinning_box(0.0, CD_STEP_RK8PD, 0);
+        cr_expect_eq(cd_spin_steps(m, 1.0, NULL, NULL), -1);
+        cr_expect_eq(cd_spin_steps(r, 1.0, NULL, NULL), -1);
+        cd_model_free(m);
+        cd_model_free(r);
+    }
+}
+
+/* `capdyn check` and `run` warn at 1e6 rad/s with the steps it will cost,
+ * and go on (exit 0); a shipped tumbling scenario is not warned about */
+Test(build, an_extreme_tumbling_rate_is_warned_about)
+{
+    char dir[512], shipped[1024], *out = NULL, *err = NULL;
+    const char *check[] = {"check", "spin.toml", NULL};
+    const char *run[] = {"run", "spin.toml", "-o", "spin.h5", "-q", "--set", "simulation.duration=0.05", "--set", "simulation.output_dt=0.05", NULL};
+    const char *calm[] = {"check", shipped, NULL};
+    int rc;
+    lu_tmpdir(dir, sizeof dir);
+    lu_write(dir, "spin.toml",
+             "[simulation]\nduration = 1.0\n\n[[target]]\nname = \"sat\"\nmass = 500.0\ninertia = [100.0, 150.0, 200.0]\n"
+             "angular_velocity = [1e6, 0.0, 0.0]\nshape = { type = \"box\", size = [1.7, 1.3, 0.8] }\n");
+    rc = lu_capdyn(dir, &out, &err, check);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(err && strstr(err, "warning: spin.toml: system 'sat' tumbles at 1e+06 rad/s") &&
+                  strstr(err, "roughly 2.6e+06 integrator steps (rk8pd at rtol 1e-09) for duration = 1 s"),
+              "stderr: %s", err ? err : "(none)");
+    free(out);
+    free(err);
+    rc = lu_capdyn(dir, &out, &err, run);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(err && strstr(err, "tumbles at 1e+06 rad/s") && strstr(err, "roughly 1.3e+05 integrator steps"),
+              "stderr (duration 0.05 s): %s", err ? err : "(none)");
+    free(out);
+    free(err);
+    snprintf(shipped, sizeof shipped, "%s/scenarios/tumbling_target.toml", lu_root());
+    if (shipped[0] != '/') { /* relative root: from the test's directory */
+        char cwd[512];
+        cr_assert_not_null(getcwd(cwd, sizeof cwd));
+        snprintf(shipped, sizeof shipped, "%s/%s/scenarios/tumbling_target.toml", cwd, lu_root());
+    }
+    rc = lu_capdyn(dir, &out, &err, calm);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(!err || !strstr(err, "warning"), "stderr: %s", err);
+    free(out);
+    free(err);
+    lu_rm_rf(dir);
+}

@@ -77,6 +77,21 @@ cd_target_desc cd_target_desc_default(void);
  * err filled. */
 int cd_build_target(cd_model *m, const cd_target_desc *t, cd_error *err);
 
+/* The cost of a tumbling rate. An adaptive stepper follows a rotation at
+ * rate w with steps of a roughly fixed angle at a given tolerance, so a run
+ * of `duration` s takes about c(stepper, rtol) |w| duration steps whatever
+ * h_max allows: 1e6 rad/s for 1 s is millions of steps. c is the measured
+ * steps per radian of a torque-free tumbling box (docs/embedding.md,
+ * "Tumbling rate"): rk8pd 2.6, rkck 15, rkf45 22, rk4imp 19, msbdf 29,
+ * ros34pw2 635 at rtol = 1e-9, scaled by (1e-9 / rtol)^(1/k) with k = 8
+ * (rk8pd), 3 (ros34pw2), 5 (the others): a rough figure for a warning
+ * (within a factor of 2 of the steps taken on that tumbling box; a spin
+ * about a principal axis takes up to 3 times fewer: tests/test_build.c). Returns the free system with the largest
+ * initial |angular velocity| (its rate in *rate [rad/s], the steps in
+ * *steps), or -1 when no free system rotates or the stepper takes fixed
+ * steps (rk4: the cost is duration / h_fixed). rate and steps may be NULL. */
+int cd_spin_steps(const cd_model *m, double duration, double *rate, double *steps);
+
 /* ---- hands ------------------------------------------------------------------ */
 
 #define CD_HAND_MAX_LINKS 16        /* links per finger */

@@ -129,3 +129,41 @@ int cd_build_target(cd_model *m, const cd_target_desc *t, cd_error *err)
         if (cd_build_shape(m, b0, &t->shapes[i], err) < 0) return -1;
     return sys;
 }
+
+/* steps per radian of a tumbling box at rtol = 1e-9, and the exponent k of
+ * their tolerance scaling (the stepper's order + 1, roughly), measured with
+ * `capdyn run` on a free box of inertia (100, 150, 200) kg m^2 at
+ * w = (1e3, 1, 1e3) and (1e4, 1, 1e4) rad/s for 0.2 s (stats_nsteps), and at
+ * rtol = 1e-6: docs/embedding.md, "Tumbling rate" */
+static int spin_cost(cd_stepper st, double *c, double *k)
+{
+    switch (st) {
+    case CD_STEP_RK8PD: *c = 2.6; *k = 8; return 1;
+    case CD_STEP_RKCK: *c = 15; *k = 5; return 1;
+    case CD_STEP_RKF45: *c = 22; *k = 5; return 1;
+    case CD_STEP_RK4IMP: *c = 19; *k = 5; return 1;
+    case CD_STEP_MSBDF: *c = 29; *k = 5; return 1;
+    case CD_STEP_ROS34PW2: *c = 635; *k = 3; return 1;
+    default: return 0; /* fixed steps */
+    }
+}
+
+int cd_spin_steps(const cd_model *m, double duration, double *rate, double *steps)
+{
+    double c, k, w = 0, rt;
+    int s, best = -1;
+    if (rate) *rate = 0;
+    if (steps) *steps = 0;
+    if (!m || !spin_cost(m->opt.stepper, &c, &k)) return -1;
+    for (s = 0; s < m->nsys; s++) {
+        double ws;
+        if (m->sys_base_type[s] != CD_BASE_FREE) continue;
+        ws = cd_v3_norm(m->sys_angvel0 + 3 * s);
+        if (ws > w) { w = ws; best = s; }
+    }
+    if (best < 0) return -1;
+    rt = m->opt.rtol > 0 ? m->opt.rtol : m->opt.atol > 0 ? m->opt.atol : 1e-9; /* rtol 0: atol rules */
+    if (rate) *rate = w;
+    if (steps) *steps = c * pow(1e-9 / rt, 1.0 / k) * w * (duration > 0 ? duration : 0);
+    return best;
+}
