@@ -700,25 +700,18 @@ NodeP parse_override_value(const std::string &value, const Loc &L)
     return out;
 }
 
-void apply_override(NodeP &root, const std::string &ov)
-{
-    Loc L;
-    L.ovr = std::make_shared<const std::string>(ov);
-    size_t eq = ov.find('=');
-    if (eq == std::string::npos) fail_at(L, "", "expected KEY.PATH=VALUE");
-    std::string path = trim(ov.substr(0, eq)), value = trim(ov.substr(eq + 1));
-    if (path.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the key path is empty)");
-    if (value.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the value is empty)");
+/* a --set key path split into segments: ident ('[' int ']')* separated by '.' */
+struct OvSeg {
+    std::string id;
+    std::vector<size_t> ix;
+};
 
-    /* split into segments: ident ('[' int ']')* separated by '.' */
-    struct Seg {
-        std::string id;
-        std::vector<size_t> ix;
-    };
-    std::vector<Seg> segs;
+std::vector<OvSeg> parse_key_path(const std::string &path, const Loc &L)
+{
+    std::vector<OvSeg> segs;
     size_t i = 0;
     while (i < path.size()) {
-        Seg s;
+        OvSeg s;
         while (i < path.size() && is_ident_char(path[i])) s.id += path[i++];
         if (s.id.empty()) fail_at(L, "", "bad key path '" + path + "' (expected names separated by '.', indices as [N])");
         while (i < path.size() && path[i] == '[') {
@@ -740,6 +733,20 @@ void apply_override(NodeP &root, const std::string &ov)
             if (i == path.size()) fail_at(L, "", "bad key path '" + path + "' (ends with '.')");
         }
     }
+    return segs;
+}
+
+void apply_override(NodeP &root, const std::string &ov)
+{
+    Loc L;
+    L.ovr = std::make_shared<const std::string>(ov);
+    size_t eq = ov.find('=');
+    if (eq == std::string::npos) fail_at(L, "", "expected KEY.PATH=VALUE");
+    std::string path = trim(ov.substr(0, eq)), value = trim(ov.substr(eq + 1));
+    if (path.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the key path is empty)");
+    if (value.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the value is empty)");
+
+    std::vector<OvSeg> segs = parse_key_path(path, L);
     if (segs[0].id == "include") fail_at(L, "", "'include' cannot be changed by --set");
     if (segs.size() > (size_t)CD_MAX_KEY_NAMES)
         fail_at(L, "", "expected a key path of at most " + std::to_string(CD_MAX_KEY_NAMES) + " names, got " +
@@ -749,7 +756,7 @@ void apply_override(NodeP &root, const std::string &ov)
     NodeP *slot = &root;
     std::string shown;  /* the canonical path walked so far, for messages */
     for (size_t k = 0; k < segs.size(); k++) {
-        const Seg &s = segs[k];
+        const OvSeg &s = segs[k];
         bool last = k + 1 == segs.size();
         Node &cur = **slot;
         if (cur.kind == NK::Table) {
@@ -2281,6 +2288,125 @@ struct Builder {
         }
     }
 
+    /* [simulation]: the run's options, duration and sampling, its work budget */
+    void simulation(const Tab &top, Run &run)
+    {
+        Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
+        Tab t(&sn, "simulation",
+              {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
+               "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
+               "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
+        cd_options &o = m->opt;
+        run.duration = t.need_num("duration", Range::Pos);
+        t.vec("gravity", 3, m->gravity);
+        if (Entry *e = t.get("integrator")) {
+            std::vector<std::string> names;
+            for (int i = 0; i < CD_STEP_NTYPES; i++) names.push_back(cd_stepper_name((cd_stepper)i));
+            o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
+        }
+        o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
+        o.atol = t.num("atol", o.atol, Range::NonNeg);
+        if (!(o.rtol + o.atol > 0))
+            fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");
+        o.h_init = t.num("h_init", o.h_init, Range::Pos);
+        o.h_max = t.num("h_max", o.h_max, Range::NonNeg);
+        o.h_min = t.num("h_min", o.h_min, Range::NonNeg);
+        if (o.h_max > 0 && o.h_min > o.h_max)
+            fail_at(t.get("h_min") ? t.get("h_min")->val->loc : sn.loc, t.kp("h_min"),
+                    "expected h_min <= h_max = " + fmt_num(o.h_max) + ", got " + fmt_num(o.h_min));
+        o.h_fixed = t.num("h_fixed", o.h_fixed, Range::Pos);
+        if (Entry *e = t.get("max_steps")) o.max_steps = (long)int_of(*e->val, t.kp("max_steps"), 1);
+        o.event_tol = t.num("event_tol", o.event_tol, Range::Pos);
+        o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
+        o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
+        o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
+        if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
+        run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
+        /* the sample count must be a sane integer (the CLI converts it) */
+        if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
+            Entry *e = t.get("output_dt");
+            if (!e) e = t.get("duration");
+            fail_at(e ? e->val->loc : sn.loc, t.kp("output_dt"),
+                    "expected a value in [duration / 1e9, inf) = [" + fmt_num(run.duration / CD_SCENARIO_MAX_SAMPLES) +
+                        ", inf) s (at most 1e9 samples for duration = " + fmt_num(run.duration) + " s), got " +
+                        fmt_num(run.output_dt));
+        }
+        run.flush_every = t.num("flush_every", 1.0, Range::Pos);
+        /* samples: "stop" (the integrator ends a step at each) or
+         * "interpolate" (dense output); the stiff stepper interpolates by default */
+        run.interpolate = o.stepper == CD_STEP_ROS34PW2;
+        if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
+        if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
+            Entry *e = t.get("sampling");
+            fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
+        }
+        if (Entry *e = t.get("compress")) run.no_compress = !bool_of(*e->val, t.kp("compress"));
+        work_budget(t, sn, run);
+        if (Entry *e = t.get("event_capacity")) {
+            long long v = int_of(*e->val, t.kp("event_capacity"), 1);
+            if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
+            run.event_capacity = (int)v;
+        }
+    }
+
+    /* [capture]: the verdict's object and thresholds (verdict.h) */
+    void capture(const Tab &top, Run &run)
+    {
+    for (auto &s2 : sys)
+        if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
+    if (Entry *e = top.get("capture")) {
+        Tab t(table_of(*e->val, "capture"), "capture", {"object", "feature", "v_max", "w_max", "dwell", "workspace"});
+        if (Entry *o = t.get("object")) {
+            std::string on = str_of(*o->val, t.kp("object"));
+            SysInfo *os = find_sys(on);
+            if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
+            if (m->sys_base_type[os->id] != CD_BASE_FREE)
+                fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
+            run.object = os->id;
+        }
+        if (Entry *f = t.get("feature")) {
+            std::string fn = str_of(*f->val, t.kp("feature"));
+            SysInfo *os = run.object >= 0 ? &sys[0] : nullptr;
+            for (auto &s2 : sys)
+                if (s2.id == run.object) os = &s2;
+            if (!os || !os->shape_at.count(fn))
+                fail_at(f->val->loc, t.kp("feature"), "expected the name of a shape of the object" +
+                                                         (os ? " '" + os->name + "'" + hint(fn, os->shape_names()) : std::string()) +
+                                                         ", got '" + fn + "'");
+            run.feature = os->shapes[os->shape_at[fn]].second;
+        }
+        run.v_max = t.num("v_max", run.v_max, Range::Pos);
+        run.w_max = t.num("w_max", run.w_max, Range::Pos);
+        run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
+        run.workspace = t.num("workspace", run.workspace, Range::Pos);
+    }
+    }
+
+    /* [gripper] of type 'torque' (the hand is a [[system]]) or the rest of a
+     * generated hand (stage 1 was built after its host system, if mounted) */
+    void gripper(const Tab &t, const std::string &ty, const std::string &gsys, bool mounted, const LawState &def, Run &run)
+    {
+        if (ty == "torque") {
+            for (auto &k : t.n->tab)
+                if (k.key != "type" && k.key != "system")
+                    fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
+            if (Entry *g = t.get("system")) {
+                std::string gs = str_of(*g->val, t.kp("system"));
+                if (!find_sys(gs))
+                    fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+                run.hand = find_sys(gs)->id;
+            }
+            /* type "torque": the joints are driven by their own `actuator` tables */
+        } else {
+            if (!gsys.empty() && !mounted) {
+                /* not a [[system]] (a target, or no such name): stage 1 says why */
+                gripper_hand(t, ty, def, run, 1);
+                fail_at(t.get("system")->val->loc, t.kp("system"), "expected a [[system]] name, got '" + gsys + "'");
+            }
+            gripper_hand(t, ty, def, run, mounted ? 2 : 0);
+        }
+    }
+
     void build(Node &root, Run &run, const std::string &path)
     {
         m.reset(cd_model_create());
@@ -2297,65 +2423,7 @@ struct Builder {
             run.title = std::filesystem::path(path).stem().string();
         }
 
-        /* [simulation] */
-        {
-            Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
-            Tab t(&sn, "simulation",
-                  {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
-                   "event_tol", "dwell", "v_reg", "fd_eps", "output_dt", "flush_every", "event_capacity",
-                   "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
-            cd_options &o = m->opt;
-            run.duration = t.need_num("duration", Range::Pos);
-            t.vec("gravity", 3, m->gravity);
-            if (Entry *e = t.get("integrator")) {
-                std::vector<std::string> names;
-                for (int i = 0; i < CD_STEP_NTYPES; i++) names.push_back(cd_stepper_name((cd_stepper)i));
-                o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
-            }
-            o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
-            o.atol = t.num("atol", o.atol, Range::NonNeg);
-            if (!(o.rtol + o.atol > 0))
-                fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");
-            o.h_init = t.num("h_init", o.h_init, Range::Pos);
-            o.h_max = t.num("h_max", o.h_max, Range::NonNeg);
-            o.h_min = t.num("h_min", o.h_min, Range::NonNeg);
-            if (o.h_max > 0 && o.h_min > o.h_max)
-                fail_at(t.get("h_min") ? t.get("h_min")->val->loc : sn.loc, t.kp("h_min"),
-                        "expected h_min <= h_max = " + fmt_num(o.h_max) + ", got " + fmt_num(o.h_min));
-            o.h_fixed = t.num("h_fixed", o.h_fixed, Range::Pos);
-            if (Entry *e = t.get("max_steps")) o.max_steps = (long)int_of(*e->val, t.kp("max_steps"), 1);
-            o.event_tol = t.num("event_tol", o.event_tol, Range::Pos);
-            o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
-            o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
-            o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
-            if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
-            run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
-            /* the sample count must be a sane integer (the CLI converts it) */
-            if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
-                Entry *e = t.get("output_dt");
-                if (!e) e = t.get("duration");
-                fail_at(e ? e->val->loc : sn.loc, t.kp("output_dt"),
-                        "expected a value in [duration / 1e9, inf) = [" + fmt_num(run.duration / CD_SCENARIO_MAX_SAMPLES) +
-                            ", inf) s (at most 1e9 samples for duration = " + fmt_num(run.duration) + " s), got " +
-                            fmt_num(run.output_dt));
-            }
-            run.flush_every = t.num("flush_every", 1.0, Range::Pos);
-            /* samples: "stop" (the integrator ends a step at each) or
-             * "interpolate" (dense output); the stiff stepper interpolates by default */
-            run.interpolate = o.stepper == CD_STEP_ROS34PW2;
-            if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
-            if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
-                Entry *e = t.get("sampling");
-                fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
-            }
-            if (Entry *e = t.get("compress")) run.no_compress = !bool_of(*e->val, t.kp("compress"));
-            work_budget(t, sn, run);
-            if (Entry *e = t.get("event_capacity")) {
-                long long v = int_of(*e->val, t.kp("event_capacity"), 1);
-                if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
-                run.event_capacity = (int)v;
-            }
-        }
+        simulation(top, run);
 
         /* [contact] defaults */
         LawState def;
@@ -2406,59 +2474,9 @@ struct Builder {
         }
 
         /* [gripper] */
-        if (gt) {
-            const Tab &t = *gt;
-            const std::string &ty = gty;
-            if (ty == "torque") {
-                for (auto &k : t.n->tab)
-                    if (k.key != "type" && k.key != "system")
-                        fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
-                if (Entry *g = t.get("system")) {
-                    std::string gs = str_of(*g->val, t.kp("system"));
-                    if (!find_sys(gs))
-                        fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
-                    run.hand = find_sys(gs)->id;
-                }
-                /* type "torque": the joints are driven by their own `actuator` tables */
-            } else {
-                if (!gsys.empty() && !mounted) {
-                    /* not a [[system]] (a target, or no such name): stage 1 says why */
-                    gripper_hand(t, ty, def, run, 1);
-                    fail_at(t.get("system")->val->loc, t.kp("system"), "expected a [[system]] name, got '" + gsys + "'");
-                }
-                gripper_hand(t, ty, def, run, mounted ? 2 : 0);
-            }
-        }
+        if (gt) gripper(*gt, gty, gsys, mounted, def, run);
 
-        /* [capture]: the verdict's object and thresholds (verdict.h) */
-        for (auto &s2 : sys)
-            if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
-        if (Entry *e = top.get("capture")) {
-            Tab t(table_of(*e->val, "capture"), "capture", {"object", "feature", "v_max", "w_max", "dwell", "workspace"});
-            if (Entry *o = t.get("object")) {
-                std::string on = str_of(*o->val, t.kp("object"));
-                SysInfo *os = find_sys(on);
-                if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
-                if (m->sys_base_type[os->id] != CD_BASE_FREE)
-                    fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
-                run.object = os->id;
-            }
-            if (Entry *f = t.get("feature")) {
-                std::string fn = str_of(*f->val, t.kp("feature"));
-                SysInfo *os = run.object >= 0 ? &sys[0] : nullptr;
-                for (auto &s2 : sys)
-                    if (s2.id == run.object) os = &s2;
-                if (!os || !os->shape_at.count(fn))
-                    fail_at(f->val->loc, t.kp("feature"), "expected the name of a shape of the object" +
-                                                             (os ? " '" + os->name + "'" + hint(fn, os->shape_names()) : std::string()) +
-                                                             ", got '" + fn + "'");
-                run.feature = os->shapes[os->shape_at[fn]].second;
-            }
-            run.v_max = t.num("v_max", run.v_max, Range::Pos);
-            run.w_max = t.num("w_max", run.w_max, Range::Pos);
-            run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
-            run.workspace = t.num("workspace", run.workspace, Range::Pos);
-        }
+        capture(top, run);
         if (run.hand == run.object) run.object = -1;
 
         /* [control] (after the gripper: it closes the gripper's motors) */
