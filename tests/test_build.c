@@ -649,3 +649,127 @@ Test(build, an_extreme_tumbling_rate_is_warned_about)
     free(err);
     lu_rm_rf(dir);
 }
+
+/* ---- a chaser: the shipped capture scenario, built in C ------------------- */
+
+#include "../src/math/cd_math.h" /* cd_m3_from_rpy: the loader's rpy_deg */
+
+/* scenarios/capture_handrail_tumbling.toml (the ETS-VII chaser and target,
+ * a soft gripper of two finger pairs on the wrist, reaction wheels) built
+ * with cd_build_chaser, cd_build_hand, cd_build_target: the same model,
+ * entry for entry, and the same wheels in the controller's configuration */
+Test(build, shipped_capture_scenario_equals_the_c_build)
+{
+    char path[1024];
+    cd_error err;
+    cd_scenario *sc;
+    cd_model *m = cd_model_create();
+    cd_chaser_desc c = cd_chaser_desc_default();
+    cd_target_desc t = cd_target_desc_default();
+    cd_hand_desc h = cd_hand_desc_default();
+    cd_shape_desc bus = cd_shape_desc_default(), tshape[2];
+    cd_link_desc arm[6];
+    cd_joint_props jp[6];
+    cd_contact_law law = cd_contact_law_default(), rule = cd_contact_law_from_rule(1e3, 10, 0.1, 1.0, 0.5);
+    cd_ctrl_config cfg = cd_ctrl_config_default();
+    cd_hand hand;
+    /* name, axis, origin x, mass, com x, inertia diagonal, q0 [deg] */
+    static const struct { const char *n; double ax[3], ox, mass, cx, I[3], q0; } L[6] = {
+        {"shoulder_yaw", {0, 0, 1}, 1.0, 10.0, 0.075, {0.05, 0.05, 0.05}, 0},
+        {"upper_arm", {0, 1, 0}, 0.15, 25.0, 0.45, {0.1, 1.69, 1.69}, -30.0},
+        {"forearm", {0, 1, 0}, 0.9, 20.0, 0.45, {0.08, 1.35, 1.35}, 60.0},
+        {"wrist_pitch", {0, 1, 0}, 0.9, 5.0, 0.05, {0.01, 0.01, 0.01}, -30.0},
+        {"wrist_yaw", {0, 0, 1}, 0.1, 5.0, 0.05, {0.01, 0.01, 0.01}, 0},
+        {"wrist_roll", {1, 0, 0}, 0.1, 6.0, 0.08, {0.02, 0.02, 0.02}, 0}};
+    int chaser, tgt, i;
+    snprintf(path, sizeof path, "%s/scenarios/capture_handrail_tumbling.toml", lu_root());
+    sc = cd_scenario_load(path, NULL, 0, &err);
+    cr_assert_not_null(sc, "%s", err.msg);
+    m->opt.h_max = 1e-3;
+    /* the chaser: a 2 m bus, the 6-joint arm with stops at +-170 deg, wheels of 1 N m */
+    bus.type = CD_SHAPE_BOX;
+    bus.size[0] = bus.size[1] = bus.size[2] = 2.0;
+    for (i = 0; i < 6; i++) {
+        arm[i] = cd_link_desc_default();
+        arm[i].name = L[i].n;
+        arm[i].parent = i - 1;
+        memcpy(arm[i].axis, L[i].ax, sizeof arm[i].axis);
+        arm[i].pos[0] = L[i].ox;
+        arm[i].mass = L[i].mass;
+        arm[i].com[0] = L[i].cx;
+        memset(arm[i].inertia, 0, sizeof arm[i].inertia);
+        arm[i].inertia[0] = L[i].I[0]; arm[i].inertia[4] = L[i].I[1]; arm[i].inertia[8] = L[i].I[2];
+        arm[i].q0 = L[i].q0 * DEG;
+        jp[i] = cd_joint_props_default();
+        jp[i].limited = 1;
+        jp[i].lower = -170.0 * DEG;
+        jp[i].upper = 170.0 * DEG;
+    }
+    c.mass = 2540.0;
+    c.inertia[0] = c.inertia[4] = c.inertia[8] = 1693.0;
+    c.shapes = &bus;
+    c.nshape = 1;
+    c.arm = arm;
+    c.arm_joint = jp;
+    c.narm = 6;
+    c.wheels = 1;
+    c.wheel_kp = 2000.0; c.wheel_kd = 8000.0; c.wheel_torque = 1.0;
+    chaser = cd_build_chaser(m, &c, &err);
+    cr_assert(chaser >= 0, "%s", err.msg);
+    /* the gripper on the wrist: two finger pairs, closed by the trigger */
+    h.type = CD_HAND_SOFT;
+    h.layout = CD_HAND_TWO_PAIRS;
+    h.pair_offset = 0.06;
+    h.attach_body = m->sys_body_adr[chaser] + 6;
+    h.palm_size[2] = 0.16;
+    h.palm_pos[0] = 0.12;
+    cd_m3_from_rpy(h.palm_rot, 0.0 * DEG, 0.0 * DEG, -90.0 * DEG);
+    h.link_length[1] = 0.07;
+    h.link_mass[0] = 0.15; h.link_mass[1] = 0.1;
+    h.checkpoint_spacing = 0.01;
+    h.torque = 0.5;
+    h.stall_torque = 0.5; h.noload_speed = 5.0;
+    h.close_on_trigger = 1;
+    h.joint_spring = 0.02; h.joint_damping = 0.005;
+    h.joint_limited = 1;
+    h.joint_lower[0] = h.joint_lower[1] = -5.0 * DEG;
+    h.joint_upper[0] = h.joint_upper[1] = 120.0 * DEG;
+    cr_assert(cd_build_hand(m, &h, &hand, &err) >= 0, "%s", err.msg);
+    /* the 410 kg target tumbling at 3 deg/s, with its handrail */
+    tshape[0] = cd_shape_desc_default();
+    tshape[0].type = CD_SHAPE_BOX;
+    tshape[0].size[0] = 1.6; tshape[0].size[1] = 1.4; tshape[0].size[2] = 1.2;
+    tshape[1] = cd_shape_desc_default();
+    tshape[1].type = CD_SHAPE_HANDRAIL;
+    tshape[1].radius = 0.03; tshape[1].length = 0.3; tshape[1].height = 0.15; tshape[1].post = 0.06;
+    tshape[1].pos[0] = -0.8; tshape[1].pos[2] = 0.2;
+    cd_m3_from_rpy(tshape[1].rot, 0.0 * DEG, -90.0 * DEG, 0.0 * DEG);
+    t.mass = 410.0;
+    t.inertia[0] = 116.0; t.inertia[4] = 137.0; t.inertia[8] = 154.0;
+    t.pos[0] = 4.1338; t.pos[1] = 0.005; t.pos[2] = -0.2;
+    t.angvel[0] = 3.0 * DEG;
+    t.shapes = tshape;
+    t.nshape = 2;
+    tgt = cd_build_target(m, &t, &err);
+    cr_assert(tgt >= 0, "%s", err.msg);
+    /* [contact]: the paper's rule, mu_max 0.5, mu 0.4 */
+    law.K = rule.K; law.D = rule.D; law.Kt = law.K; law.Dt = law.D;
+    law.mu_s = 0.5; law.mu_k = 0.4;
+    cr_assert_eq(cd_build_hand_drive(m, &h, &hand, &law, &tgt, 1, &err), CD_OK, "%s", err.msg);
+    cr_assert_eq(cd_model_set_user_switches(m, 2, &err), CD_OK, "%s", err.msg); /* the controller's (detumble off) */
+    cr_assert_eq(cd_model_finalize(m, &err), CD_OK, "%s", err.msg);
+    cr_expect_eq(model_diff(m, sc->model), 0, "%d entries differ", bad);
+    cr_expect_eq(m->nbody, 1 + 6 + 4 * 2 + 1, "bus, arm, four 2-link fingers, target");
+    cr_expect_eq(m->nshape, 1 + 1 + 8 + 1 + 3, "bus, palm, finger capsules, target body, handrail");
+    cd_chaser_wheels(&c, chaser, &cfg);
+    cr_assert_not_null(sc->control);
+    cr_expect_eq(sc->control->sys, cfg.sys);
+    cr_expect_eq(sc->control->attitude, cfg.attitude);
+    cr_expect_eq(sc->control->att_kp, cfg.att_kp);
+    cr_expect_eq(sc->control->att_kd, cfg.att_kd);
+    cr_expect_eq(sc->control->att_tau_max, cfg.att_tau_max);
+    cr_expect_eq(sc->control->palm, hand.palm);
+    cr_expect_eq(sc->control->nclose, hand.nact);
+    cd_model_free(m);
+    cd_scenario_free(sc);
+}

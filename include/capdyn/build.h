@@ -17,6 +17,7 @@
 #define CAPDYN_BUILD_H
 
 #include "capdyn/model.h"
+#include "capdyn/control.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -91,6 +92,41 @@ int cd_build_target(cd_model *m, const cd_target_desc *t, cd_error *err);
  * *steps), or -1 when no free system rotates or the stepper takes fixed
  * steps (rk4: the cost is duration / h_fixed). rate and steps may be NULL. */
 int cd_spin_steps(const cd_model *m, double duration, double *rate, double *steps);
+
+/* ---- chasers ---------------------------------------------------------------- */
+
+/* A chaser: a base (the bus, free unless `fixed`) with its shapes, an arm of
+ * revolute or prismatic links, and reaction wheels (the capture
+ * controller's base attitude control: an external torque on the base with a
+ * per-axis limit; the wheels' own momentum is not modelled, docs/capture.md).
+ * A gripper is mounted on the arm's last link with cd_build_hand
+ * (attach_body), built right after the chaser. */
+typedef struct {
+    const char *name;     /* copied; default "chaser" */
+    int fixed;            /* 1: fixed base; default 0 (free-floating) */
+    double mass;          /* [kg], default 1 */
+    double inertia[9];    /* about the CoM, base frame [kg m^2], default the unit matrix */
+    double pos[3], quat[4], vel[3], angvel[3]; /* initial state, world (quat default identity) */
+    const cd_shape_desc *shapes; /* (nshape) on the base */
+    int nshape;
+    const cd_link_desc *arm; /* (narm) the arm's links, each after its parent; arm[i].parent is an index
+                                into arm (< i), or -1 for the base -- not a body id */
+    const cd_joint_props *arm_joint; /* (narm) stops, springs, friction of each joint, or NULL (none) */
+    int narm;
+    int wheels;           /* 1: reaction wheels on (cd_chaser_wheels); default 0 */
+    double wheel_kp, wheel_kd, wheel_torque; /* [N m/rad], [N m s/rad], per-axis limit [N m];
+                                default those of cd_ctrl_config_default() */
+} cd_chaser_desc;
+
+cd_chaser_desc cd_chaser_desc_default(void);
+
+/* Adds the chaser: its system, base shapes and arm. Arm link i is body
+ * m->sys_body_adr[sys] + 1 + i. Returns the system id, or -1 with err filled. */
+int cd_build_chaser(cd_model *m, const cd_chaser_desc *c, cd_error *err);
+
+/* The wheels in a capture controller's configuration: cfg->sys = sys and
+ * the attitude law's on/gains/limit from c. */
+void cd_chaser_wheels(const cd_chaser_desc *c, int sys, cd_ctrl_config *cfg);
 
 /* ---- hands ------------------------------------------------------------------ */
 
