@@ -42,6 +42,7 @@ typedef struct {
     int nvert;            /* convex: at least 4 */
 } cd_shape_desc;
 
+/* The defaults listed above (by value; nothing to free). */
 cd_shape_desc cd_shape_desc_default(void);
 
 /* Adds the shape(s) of s to body `body`. A handrail is a round bar of
@@ -72,6 +73,7 @@ typedef struct {
     int nshape;
 } cd_target_desc;
 
+/* The defaults listed above (by value; nothing to free). */
 cd_target_desc cd_target_desc_default(void);
 
 /* Adds the target system and its shapes. Returns the system id, or -1 with
@@ -118,6 +120,7 @@ typedef struct {
                                 default those of cd_ctrl_config_default() */
 } cd_chaser_desc;
 
+/* The defaults listed above (by value; nothing to free). */
 cd_chaser_desc cd_chaser_desc_default(void);
 
 /* Adds the chaser: its system, base shapes and arm. Arm link i is body
@@ -190,6 +193,7 @@ typedef struct {
     double torque_limit;       /* coupling limit [N m]; 0 (default) = the stall torque if any, else none */
 } cd_hand_desc;
 
+/* The defaults listed above (by value; nothing to free). */
 cd_hand_desc cd_hand_desc_default(void);
 
 /* What cd_build_hand made: ids for the drive, the controller and the caller. */
