@@ -24,7 +24,7 @@ LIBS_CORE = $(shell pkg-config --libs $(PKGS_CORE) 2>/dev/null) -lm
 LIBS_IO   = $(shell pkg-config --libs $(PKGS_IO) 2>/dev/null)
 LIBS_TEST = $(shell pkg-config --libs criterion 2>/dev/null)
 
-CORE_SRC = $(wildcard src/math/*.c src/model/*.c src/data/*.c src/kinematics/*.c src/dynamics/*.c src/contact/*.c src/mechanism/*.c src/sim/*.c src/control/*.c)
+CORE_SRC = $(wildcard src/math/*.c src/model/*.c src/builders/*.c src/data/*.c src/kinematics/*.c src/dynamics/*.c src/contact/*.c src/mechanism/*.c src/sim/*.c src/control/*.c)
 IO_SRC_C = $(wildcard src/io/*.c src/analysis/*.c)
 IO_SRC_CXX = $(wildcard src/io/*.cpp)
 CLI_SRC  = $(wildcard src/cli/*.c)

@@ -9,6 +9,7 @@
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
 #include "capdyn/verdict.h"
+#include "capdyn/build.h" /* cd_spin_steps */
 
 #include <math.h>
 #include <signal.h>
@@ -237,6 +238,21 @@ static void warn_initial_overlap(const char *scenario, const cd_model *m, const 
     if (cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", scenario, msg);
 }
 
+/* A tumbling rate that costs far more steps than the run would otherwise
+ * take (cd_spin_steps, build.h: roughly; more than 1e5 steps and 10 times
+ * the run's least steps): one line on stderr, the run goes on */
+static void warn_fast_spin(const char *scenario, const cd_scenario *sc)
+{
+    const cd_model *m = sc->model;
+    double w, steps;
+    int s = cd_spin_steps(m, sc->duration, &w, &steps);
+    if (s < 0 || !(steps > 1e5) || !(steps > 10 * sc->min_steps)) return;
+    fprintf(stderr,
+            "capdyn: warning: %s: system '%s' tumbles at %.3g rad/s: following it takes roughly %.2g integrator steps "
+            "(%s at rtol %g) for duration = %g s, against at least %.3g otherwise\n",
+            scenario, m->sys_name[s], w, steps, cd_stepper_name(m->opt.stepper), m->opt.rtol, sc->duration, sc->min_steps);
+}
+
 int cmd_check(int argc, char **argv)
 {
     run_opts o;
@@ -261,6 +277,7 @@ int cmd_check(int argc, char **argv)
         if (d) warn_initial_overlap(o.scenario, m, d);
         cd_data_free(d);
     }
+    warn_fast_spin(o.scenario, sc);
     printf("%s: OK: '%s': %d system%s, %d bodies (%d joints), %d check points, %d shapes, %d contact slots, "
            "state size %d; %g s, output every %g s\n",
            o.scenario, sc->title ? sc->title : "", m->nsys, m->nsys == 1 ? "" : "s", m->nbody, njoint, m->ncp,
@@ -492,6 +509,7 @@ int cmd_run(int argc, char **argv)
         return CLI_FAIL;
     }
     warn_initial_overlap(o.scenario, m, d);
+    warn_fast_spin(o.scenario, sc);
     /* the scenario's built-in controller ([control], docs/capture.md) */
     if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
         cli_error("%s: %s", o.scenario, err.msg);

@@ -24,6 +24,7 @@
  * errors are thrown internally as LoadError and turned into cd_error at the
  * two entry points, which also catch std::bad_alloc and anything else. */
 #include "capdyn/io.h"
+#include "capdyn/build.h"
 #include "../math/cd_math.h"
 
 #include <toml++/toml.h>
@@ -699,25 +700,18 @@ NodeP parse_override_value(const std::string &value, const Loc &L)
     return out;
 }
 
-void apply_override(NodeP &root, const std::string &ov)
-{
-    Loc L;
-    L.ovr = std::make_shared<const std::string>(ov);
-    size_t eq = ov.find('=');
-    if (eq == std::string::npos) fail_at(L, "", "expected KEY.PATH=VALUE");
-    std::string path = trim(ov.substr(0, eq)), value = trim(ov.substr(eq + 1));
-    if (path.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the key path is empty)");
-    if (value.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the value is empty)");
+/* a --set key path split into segments: ident ('[' int ']')* separated by '.' */
+struct OvSeg {
+    std::string id;
+    std::vector<size_t> ix;
+};
 
-    /* split into segments: ident ('[' int ']')* separated by '.' */
-    struct Seg {
-        std::string id;
-        std::vector<size_t> ix;
-    };
-    std::vector<Seg> segs;
+std::vector<OvSeg> parse_key_path(const std::string &path, const Loc &L)
+{
+    std::vector<OvSeg> segs;
     size_t i = 0;
     while (i < path.size()) {
-        Seg s;
+        OvSeg s;
         while (i < path.size() && is_ident_char(path[i])) s.id += path[i++];
         if (s.id.empty()) fail_at(L, "", "bad key path '" + path + "' (expected names separated by '.', indices as [N])");
         while (i < path.size() && path[i] == '[') {
@@ -739,6 +733,20 @@ void apply_override(NodeP &root, const std::string &ov)
             if (i == path.size()) fail_at(L, "", "bad key path '" + path + "' (ends with '.')");
         }
     }
+    return segs;
+}
+
+void apply_override(NodeP &root, const std::string &ov)
+{
+    Loc L;
+    L.ovr = std::make_shared<const std::string>(ov);
+    size_t eq = ov.find('=');
+    if (eq == std::string::npos) fail_at(L, "", "expected KEY.PATH=VALUE");
+    std::string path = trim(ov.substr(0, eq)), value = trim(ov.substr(eq + 1));
+    if (path.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the key path is empty)");
+    if (value.empty()) fail_at(L, "", "expected KEY.PATH=VALUE (the value is empty)");
+
+    std::vector<OvSeg> segs = parse_key_path(path, L);
     if (segs[0].id == "include") fail_at(L, "", "'include' cannot be changed by --set");
     if (segs.size() > (size_t)CD_MAX_KEY_NAMES)
         fail_at(L, "", "expected a key path of at most " + std::to_string(CD_MAX_KEY_NAMES) + " names, got " +
@@ -748,7 +756,7 @@ void apply_override(NodeP &root, const std::string &ov)
     NodeP *slot = &root;
     std::string shown;  /* the canonical path walked so far, for messages */
     for (size_t k = 0; k < segs.size(); k++) {
-        const Seg &s = segs[k];
+        const OvSeg &s = segs[k];
         bool last = k + 1 == segs.size();
         Node &cur = **slot;
         if (cur.kind == NK::Table) {
@@ -1263,25 +1271,25 @@ struct Builder {
             if (Entry *e = t.get(k))
                 if (std::find(takes.begin(), takes.end(), k) == takes.end())
                     fail_at(e->kloc, t.kp(k), "does not apply to a " + ty + " shape (it takes: " + list(takes) + ")");
-        double pos[3] = {0, 0, 0}, R[9], sz[3] = {0, 0, 0};
-        t.vec("position", 3, pos);
-        rotation_of(t, R, "normal");
+        cd_shape_desc sd = cd_shape_desc_default();
+        sd.type = type;
+        t.vec("position", 3, sd.pos);
+        rotation_of(t, sd.rot, "normal");
         std::vector<double> verts;
         if (ty == "plane") {
             if (Entry *e = t.get("normal")) {
                 double nrm[3];
                 vec_of(*e->val, t.kp("normal"), 3, nrm);
                 if (!(cd_v3_norm(nrm) > 1e-12)) fail_at(e->val->loc, t.kp("normal"), "expected a non-zero vector, got " + render(*e->val));
-                rot_z_to(nrm, R);
+                rot_z_to(nrm, sd.rot);
             }
         } else if (ty == "sphere") {
-            sz[0] = t.need_num("radius", Range::Pos);
+            sd.radius = t.need_num("radius", Range::Pos);
         } else if (ty == "box") {
-            vec_of(t.need("size", "an array of 3 positive edge lengths [m]"), t.kp("size"), 3, sz, Range::Pos);
-            for (double &v : sz) v *= 0.5;
+            vec_of(t.need("size", "an array of 3 positive edge lengths [m]"), t.kp("size"), 3, sd.size, Range::Pos);
         } else if (ty == "cylinder" || ty == "capsule") {
-            sz[0] = t.need_num("radius", Range::Pos);
-            sz[1] = 0.5 * t.need_num("length", Range::Pos);
+            sd.radius = t.need_num("radius", Range::Pos);
+            sd.length = t.need_num("length", Range::Pos);
         } else {
             const Node &vn = t.need("vertices", "an array of at least 4 [x, y, z] points");
             if (vn.kind != NK::Array || vn.arr.size() < 4)
@@ -1303,8 +1311,9 @@ struct Builder {
             }
             hull_volume_check(verts, vn, t.kp("vertices"));
         }
-        int id = cd_model_add_shape(m.get(), body, (cd_shape_type)type, pos, R, sz, verts.empty() ? nullptr : verts.data(),
-                                    (int)(verts.size() / 3), &err);
+        sd.verts = verts.empty() ? nullptr : verts.data();
+        sd.nvert = (int)(verts.size() / 3);
+        int id = cd_build_shape(m.get(), body, &sd, &err);
         if (id < 0) builder_fail(node.loc, path);
         s.shape_at.emplace(name, s.shapes.size());
         s.shapes.push_back({name, id});
@@ -1318,31 +1327,26 @@ struct Builder {
     {
         for (const char *k : {"normal", "size", "vertices"})
             if (Entry *e = t.get(k)) fail_at(e->kloc, t.kp(k), "does not apply to a handrail shape (it takes: 'radius', 'length', 'height', 'post')");
-        double pos[3] = {0, 0, 0}, R[9];
-        t.vec("position", 3, pos);
-        rotation_of(t, R, "normal");
+        cd_shape_desc sd = cd_shape_desc_default();
+        sd.type = CD_SHAPE_HANDRAIL;
+        t.vec("position", 3, sd.pos);
+        rotation_of(t, sd.rot, "normal");
         double r = t.need_num("radius", Range::Pos), L = t.need_num("length", Range::Pos), h = t.need_num("height", Range::Pos);
         double w = t.num("post", 2 * r, Range::Pos);
         if (!(L > 2 * w)) fail_at(t.get("length")->val->loc, t.kp("length"), "expected a handrail longer than its two posts (" + fmt_num(2 * w) + " m), got " + fmt_num(L));
         if (!(h > r)) fail_at(t.get("height")->val->loc, t.kp("height"), "expected the bar's height above its base > its radius " + fmt_num(r) + ", got " + fmt_num(h));
-        struct Part { const char *suffix; cd_shape_type type; double p[3]; double rpy[3]; double sz[3]; };
-        Part parts[3] = {
-            {"_bar", CD_SHAPE_CAPSULE, {0, 0, h}, {0, M_PI / 2, 0}, {r, L / 2 - r, 0}},
-            {"_post0", CD_SHAPE_BOX, {-(L / 2 - w / 2), 0, h / 2}, {0, 0, 0}, {w / 2, w / 2, h / 2}},
-            {"_post1", CD_SHAPE_BOX, {L / 2 - w / 2, 0, h / 2}, {0, 0, 0}, {w / 2, w / 2, h / 2}}};
-        for (const Part &pt : parts) {
-            double Rl[9], Rw[9], pl[3], pw[3];
-            std::string nm = name + pt.suffix;
-            if (s.shape_at.count(nm)) fail_at(node.loc, t.kp("name"), "expected shape names unique in system '" + s.name + "', got '" + nm + "' twice");
-            cd_m3_from_rpy(Rl, pt.rpy[0], pt.rpy[1], pt.rpy[2]);
-            cd_m3_mul(Rw, R, Rl);
-            for (int k = 0; k < 3; k++) pl[k] = pt.p[k];
-            cd_m3_mulv(pw, R, pl);
-            cd_v3_add(pw, pw, pos);
-            int id = cd_model_add_shape(m.get(), body, pt.type, pw, Rw, pt.sz, nullptr, 0, &err);
-            if (id < 0) builder_fail(node.loc, path);
-            s.shape_at.emplace(nm, s.shapes.size());
-            s.shapes.push_back({nm, id});
+        sd.radius = r;
+        sd.length = L;
+        sd.height = h;
+        sd.post = w;
+        const char *suffix[3] = {"_bar", "_post0", "_post1"};
+        for (const char *sf : suffix)
+            if (s.shape_at.count(name + sf)) fail_at(node.loc, t.kp("name"), "expected shape names unique in system '" + s.name + "', got '" + name + sf + "' twice");
+        int id = cd_build_shape(m.get(), body, &sd, &err);
+        if (id < 0) builder_fail(node.loc, path);
+        for (int k = 0; k < 3; k++) {
+            s.shape_at.emplace(name + suffix[k], s.shapes.size());
+            s.shapes.push_back({name + suffix[k], id + k});
         }
     }
 
@@ -1628,31 +1632,24 @@ struct Builder {
         double max_wall_time = 3600.0, max_rhs_evals = 1e9, min_steps = 0, min_rhs_evals = 0;
     };
 
-    /* [gripper] of a mechanism type: generates the hand (a fixed palm box and
-     * fingers of capsule links with check points along them), its drive
-     * (actuators or clutched fingers) and the pairs of its check points with
-     * every target's shapes. docs/grippers.md. */
-    /* what the drive (stage 2) needs of the hand built in stage 1 */
+    /* [gripper] of a mechanism type: the hand (a fixed palm box and fingers
+     * of capsule links with check points along them), its drive (actuators
+     * or clutched fingers) and the pairs of its check points with every
+     * target's shapes, made by cd_build_hand / cd_build_hand_drive
+     * (include/capdyn/build.h, src/builders/hand.c) from the cd_hand_desc read
+     * here. docs/grippers.md. */
     struct GripState {
-        std::string name;
-        std::vector<double> L, M;
-        std::vector<std::vector<int>> fingers;
-        int nf = 0, sys = -1;
-        double rad = 0;
+        cd_hand_desc h = cd_hand_desc_default();
+        cd_hand hand{};
     } grip;
 
-    /* stage 1: the palm and the fingers (a mounted gripper's fingers are
-     * links of its system: built right after that system's links, before the
-     * next system); stage 2: the drive and the contact pairs (after every
-     * system); 0: both */
-    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def, Run &run, int stage = 0)
+    /* mounted on a link of an existing system (`system`, `attach`): the palm
+     * is that link, the fingers become its branches; returns the host or
+     * nullptr (a stand-alone hand named `name`) */
+    SysInfo *hand_mount(const Tab &t, std::string &name)
     {
-      if (stage != 2) {
-        std::string name = "hand";
-        /* mounted on a link of an existing system (`system`, `attach`): the
-         * palm is that link, the fingers become its branches */
         SysInfo *host = nullptr;
-        int attach = -1;
+        name = "hand";
         if (Entry *g = t.get("system")) {
             std::string gs = str_of(*g->val, t.kp("system"));
             host = find_sys(gs);
@@ -1664,359 +1661,272 @@ struct Builder {
             auto it = host->body_at.find(a);
             if (it == host->body_at.end())
                 fail_at(an.loc, t.kp("attach"), "expected 'base' or a link of system '" + gs + "', got '" + a + "'" + hint(a, host->body_names()));
-            attach = host->bodies[it->second].id;
+            int attach = host->bodies[it->second].id;
             for (int b = attach + 1; b < m->nbody; b++)
                 if (m->body_parent[b] == attach)
                     fail_at(an.loc, t.kp("attach"), "expected a link without child links (the fingers become its only branches), got '" + a + "' (parent of '" + m->body_name[b] + "')");
             for (const char *k : {"palm", "f0_l0"})
                 if (host->shape_at.count(k)) fail_at(an.loc, t.kp("attach"), std::string("expected a system without a shape named '") + k + "' (the gripper adds it)");
             name = gs;
+            grip.h.attach_body = attach;
         } else if (Entry *e = t.get("attach")) {
             fail_at(e->kloc, t.kp("attach"), "needs 'system' (the system whose link carries the palm)");
         }
         if (Entry *e = t.get("name")) name = name_of_node(*e->val, t.kp("name"));
         if (!host && find_sys(name)) fail_at(t.n->loc, t.kp("name"), "expected a system name not used yet, got '" + name + "'");
-        std::string preset = "two_opposed";
-        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120", "two_pairs", "two_interleaved"});
-        int nf = preset == "two_opposed" || preset == "two_interleaved" ? 2 : preset == "three_120" ? 3 : 4;
-        /* palm */
-        double psize[3] = {0.12, 0.04, 0.04}, pmass = 2.0, ppos[3] = {0, 0, 0}, Rp[9];
-        cd_m3_identity(Rp);
+        return host;
+    }
+
+    /* finger_joint: passive elements of every finger joint (a release
+     * spring, a damper, stops) and the initial angles */
+    void hand_finger_joint(const Tab &t, cd_hand_desc &h, const Node *&fq0_node, const Node *&flim_node)
+    {
+        Entry *e = t.get("finger_joint");
+        if (!e) return;
+        std::string fp = t.kp("finger_joint");
+        Tab ft(table_of(*e->val, fp), fp, {"spring", "damping", "limit_deg", "q0_deg"});
+        h.joint_spring = ft.num("spring", 0.0, Range::NonNeg);
+        h.joint_damping = ft.num("damping", 0.0, Range::NonNeg);
+        if (Entry *l = ft.get("limit_deg")) {
+            /* [lower, upper] for every joint, or one such pair per finger link */
+            const Node &ln = *l->val;
+            std::string lp = ft.kp("limit_deg");
+            bool per_link = ln.kind == NK::Array && !ln.arr.empty() && ln.arr[0]->kind == NK::Array;
+            std::vector<double> flim;
+            for (size_t i = 0; i < (per_link ? ln.arr.size() : 1); i++) {
+                double lim[2];
+                const Node &pn = per_link ? *ln.arr[i] : ln;
+                std::string pp = per_link ? idx(lp, i) : lp;
+                vec_of(pn, pp, 2, lim, Range::Any, per_link ? "a pair [lower, upper]" : "an array [lower, upper] or one such pair per finger link");
+                if (!(lim[0] < lim[1])) fail_at(pn.loc, pp, "expected lower < upper, got " + render(pn));
+                flim.push_back(lim[0] * DEG);
+                flim.push_back(lim[1] * DEG);
+            }
+            if (per_link && flim.size() != 2 * (size_t)h.nlink)
+                fail_at(ln.loc, lp, "expected [lower, upper] or " + std::to_string(h.nlink) + " such pairs (one per finger link), got " + render(ln));
+            for (int j = 0; j < h.nlink; j++) {
+                size_t k = per_link ? 2 * j : 0;
+                h.joint_lower[j] = flim[k];
+                h.joint_upper[j] = flim[k + 1];
+            }
+            flim_node = &ln;
+            h.joint_limited = 1;
+        }
+        if (Entry *q = ft.get("q0_deg")) {
+            const Node &qn = *q->val;
+            if (qn.kind != NK::Array) fail_at(qn.loc, ft.kp("q0_deg"), "expected an array of initial angles [deg], one per finger link, got " + render(qn));
+            for (size_t i = 0; i < qn.arr.size(); i++) {
+                double v = num_of(*qn.arr[i], idx(ft.kp("q0_deg"), i), Range::Any) * DEG;
+                if (i < (size_t)CD_HAND_MAX_LINKS) h.q0[i] = v;
+            }
+            fq0_node = &qn;
+        }
+    }
+
+    /* the palm, the links, radii and spacings */
+    void hand_geometry(const Tab &t, cd_hand_desc &h, bool mounted)
+    {
         if (Entry *e = t.get("palm")) {
             std::string pp = t.kp("palm");
             Tab pt(table_of(*e->val, pp), pp, {"size", "mass", "position", "rpy_deg", "quaternion"});
-            pt.vec("size", 3, psize, Range::Pos);
-            if (host && pt.get("mass"))
+            pt.vec("size", 3, h.palm_size, Range::Pos);
+            if (mounted && pt.get("mass"))
                 fail_at(pt.get("mass")->kloc, pt.kp("mass"), "does not apply to a gripper mounted on a link (include the palm's mass in the link's)");
-            pmass = pt.num("mass", pmass, Range::Pos);
-            pt.vec("position", 3, ppos);
-            rotation_of(pt, Rp);
+            h.palm_mass = pt.num("mass", h.palm_mass, Range::Pos);
+            pt.vec("position", 3, h.palm_pos);
+            rotation_of(pt, h.palm_rot);
         }
-        /* the palm frame on its body (mounted) or the hand's fixed base at ppos */
-        double pbpos[3] = {0, 0, 0};
-        if (host) cd_v3_copy(pbpos, ppos);
-        run.palm_rot.assign(Rp, Rp + 9);
-        run.palm_pos.assign(pbpos, pbpos + 3);
-        /* fingers */
-        std::vector<double> L, M;
-        {
-            const Node &ln = t.need("links", "an array of link lengths [m], base to tip");
-            if (ln.kind != NK::Array || ln.arr.empty() || ln.arr.size() > 16)
-                fail_at(ln.loc, t.kp("links"), "expected 1 to 16 link lengths [m], got " + render(ln));
-            for (size_t i = 0; i < ln.arr.size(); i++) L.push_back(num_of(*ln.arr[i], idx(t.kp("links"), i), Range::Pos));
-        }
+        const Node &ln = t.need("links", "an array of link lengths [m], base to tip");
+        if (ln.kind != NK::Array || ln.arr.empty() || ln.arr.size() > CD_HAND_MAX_LINKS)
+            fail_at(ln.loc, t.kp("links"), "expected 1 to 16 link lengths [m], got " + render(ln));
+        h.nlink = (int)ln.arr.size();
+        for (size_t i = 0; i < ln.arr.size(); i++) h.link_length[i] = num_of(*ln.arr[i], idx(t.kp("links"), i), Range::Pos);
         if (Entry *e = t.get("masses")) {
-            if (e->val->kind != NK::Array || e->val->arr.size() != L.size())
-                fail_at(e->val->loc, t.kp("masses"), "expected " + std::to_string(L.size()) + " masses (one per link), got " + render(*e->val));
-            for (size_t i = 0; i < L.size(); i++) M.push_back(num_of(*e->val->arr[i], idx(t.kp("masses"), i), Range::Pos));
-        } else {
-            for (double l : L) M.push_back(0.6 * l); /* ~ an aluminium tube: 0.6 kg/m */
+            if (e->val->kind != NK::Array || e->val->arr.size() != (size_t)h.nlink)
+                fail_at(e->val->loc, t.kp("masses"), "expected " + std::to_string(h.nlink) + " masses (one per link), got " + render(*e->val));
+            for (int i = 0; i < h.nlink; i++) h.link_mass[i] = num_of(*e->val->arr[i], idx(t.kp("masses"), i), Range::Pos);
         }
-        double rad = t.num("radius", 0.008, Range::Pos);
-        double spacing = t.num("spacing", 0.1, Range::Pos);
-        double cps = t.num("checkpoint_spacing", rad, Range::Pos);
-        /* passive elements of every finger joint (a release spring, a damper, stops) */
-        cd_joint_props fjp = cd_joint_props_default();
-        bool fj_any = false;
-        std::vector<double> fq0;       /* initial finger joint angles, base to tip */
-        std::vector<double> flim;      /* stops [lower, upper]: one pair for all joints, or one per link */
-        const Node *flim_node = nullptr;
-        bool flim_per_link = false;
-        const Node *fq0_node = nullptr;
-        if (Entry *e = t.get("finger_joint")) {
-            std::string fp = t.kp("finger_joint");
-            Tab ft(table_of(*e->val, fp), fp, {"spring", "damping", "limit_deg", "q0_deg"});
-            fjp.stiffness = ft.num("spring", 0.0, Range::NonNeg);
-            fjp.damping = ft.num("damping", 0.0, Range::NonNeg);
-            if (Entry *l = ft.get("limit_deg")) {
-                /* [lower, upper] for every joint, or one such pair per finger link */
-                const Node &ln = *l->val;
-                std::string lp = ft.kp("limit_deg");
-                bool per_link = ln.kind == NK::Array && !ln.arr.empty() && ln.arr[0]->kind == NK::Array;
-                for (size_t i = 0; i < (per_link ? ln.arr.size() : 1); i++) {
-                    double lim[2];
-                    const Node &pn = per_link ? *ln.arr[i] : ln;
-                    std::string pp = per_link ? idx(lp, i) : lp;
-                    vec_of(pn, pp, 2, lim, Range::Any, per_link ? "a pair [lower, upper]" : "an array [lower, upper] or one such pair per finger link");
-                    if (!(lim[0] < lim[1])) fail_at(pn.loc, pp, "expected lower < upper, got " + render(pn));
-                    flim.push_back(lim[0] * DEG);
-                    flim.push_back(lim[1] * DEG);
-                }
-                if (per_link && flim.size() != 2 * L.size())
-                    fail_at(ln.loc, lp, "expected [lower, upper] or " + std::to_string(L.size()) + " such pairs (one per finger link), got " + render(ln));
-                flim_node = &ln;
-                flim_per_link = per_link;
-                fjp.limited = 1;
+        h.radius = t.num("radius", 0.008, Range::Pos);
+        h.spacing = t.num("spacing", 0.1, Range::Pos);
+        h.checkpoint_spacing = t.num("checkpoint_spacing", h.radius, Range::Pos);
+    }
+
+    /* pair_offset; a mounted hand's new links; the initial angles against
+     * the stops; the number of check points (bounded before any is made) */
+    void hand_checks(const Tab &t, cd_hand_desc &h, SysInfo *host, const Node *fq0_node, const Node *flim_node)
+    {
+        const double rad = h.radius;
+        if (h.layout == CD_HAND_TWO_PAIRS) h.pair_offset = t.num("pair_offset", h.spacing / 2, Range::Pos);
+        else if (h.layout == CD_HAND_TWO_INTERLEAVED) {
+            /* the two fingers in parallel planes z = -/+ pair_offset: they pass each other */
+            h.pair_offset = t.num("pair_offset", 1.5 * rad, Range::Pos);
+            if (!(h.pair_offset > rad)) fail_at(t.get("pair_offset")->val->loc, t.kp("pair_offset"), "expected more than the finger radius " + fmt_num(rad) + " m (the fingers must pass each other), got " + fmt_num(h.pair_offset));
+        } else if (Entry *e = t.get("pair_offset")) fail_at(e->kloc, t.kp("pair_offset"), "applies to hand = 'two_pairs' or 'two_interleaved' only");
+        int nf = h.layout == CD_HAND_TWO_OPPOSED || h.layout == CD_HAND_TWO_INTERLEAVED ? 2 : h.layout == CD_HAND_THREE_120 ? 3 : 4;
+        for (int f = 0; f < nf; f++)
+            for (int j = 0; j < h.nlink; j++) {
+                std::string ln = "f" + std::to_string(f) + "_l" + std::to_string(j);
+                if (host && host->body_at.count(ln)) fail_at(t.n->loc, t.path, "expected a system without a link named '" + ln + "' (the gripper adds it)");
+                if (fq0_node && (size_t)h.nlink != fq0_node->arr.size())
+                    fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected " + std::to_string(h.nlink) + " angles (one per finger link), got " + render(*fq0_node));
+                if (flim_node && (h.q0[j] < h.joint_lower[j] - 1e-12 || h.q0[j] > h.joint_upper[j] + 1e-12))
+                    fail_at(fq0_node ? fq0_node->loc : flim_node->loc, t.kp("finger_joint") + (fq0_node ? ".q0_deg" : ".limit_deg"),
+                            std::string("expected initial angles within limit_deg (") + (fq0_node ? "" : "q0_deg defaults to 0, ") + "link " + std::to_string(j) + ": " +
+                                fmt_num(h.q0[j] / DEG) + " deg, stops [" + fmt_num(h.joint_lower[j] / DEG) + ", " + fmt_num(h.joint_upper[j] / DEG) + "]), got " +
+                                render(fq0_node ? *fq0_node : *flim_node));
             }
-            if (Entry *q = ft.get("q0_deg")) {
-                const Node &qn = *q->val;
-                if (qn.kind != NK::Array) fail_at(qn.loc, ft.kp("q0_deg"), "expected an array of initial angles [deg], one per finger link, got " + render(qn));
-                for (size_t i = 0; i < qn.arr.size(); i++) fq0.push_back(num_of(*qn.arr[i], idx(ft.kp("q0_deg"), i), Range::Any) * DEG);
-                fq0_node = &qn;
-            }
-            fj_any = true;
+        hand_bounds(t, h);
+    }
+
+    /* a hand's check points: at most CD_HAND_MAX_CHECKPOINTS, counted before
+     * they are made, and at least one on each finger link */
+    void hand_bounds(const Tab &t, const cd_hand_desc &h)
+    {
+        const double cps = h.checkpoint_spacing;
+        double lmax = 0;
+        int jshort = -1;
+        for (int j = 0; j < h.nlink; j++) {
+            lmax = std::max(lmax, h.link_length[j]);
+            if (jshort < 0 && !(cps <= h.link_length[j] + 1e-12)) jshort = j;
         }
-        /* the hand system */
-        cd_system_desc sd = cd_system_desc_default();
-        sd.name = name.c_str();
-        sd.type = CD_BASE_FIXED;
-        sd.mass = pmass;
-        sd.inertia[0] = pmass * (psize[1] * psize[1] + psize[2] * psize[2]) / 12.0;
-        sd.inertia[4] = pmass * (psize[0] * psize[0] + psize[2] * psize[2]) / 12.0;
-        sd.inertia[8] = pmass * (psize[0] * psize[0] + psize[1] * psize[1]) / 12.0;
-        for (int k = 0; k < 3; k++) sd.pos[k] = ppos[k];
+        /* the key that sets the spacing: checkpoint_spacing, else radius (its default) */
+        const char *key = t.get("checkpoint_spacing") ? "checkpoint_spacing" : t.get("radius") ? "radius" : nullptr;
+        double n = cd_hand_checkpoint_count(&h);
+        if (!(n <= CD_HAND_MAX_CHECKPOINTS)) {
+            double palm = (h.layout == CD_HAND_TWO_PAIRS ? 2 : 1) * std::max(0.0, std::floor((h.spacing - 2 * cps + 1e-12) / cps) + 1);
+            if (!key) key = palm > n - palm ? "spacing" : "links";
+            Entry *e = t.get(key);
+            char nb[32];
+            std::snprintf(nb, sizeof nb, "%.3g", n);
+            fail_at(e ? e->val->loc : t.n->loc, t.kp(key),
+                    "expected a hand with at most " + std::to_string(CD_HAND_MAX_CHECKPOINTS) + " check points (palm and fingers), got " +
+                        nb + " (checkpoint_spacing = " + fmt_num(cps) + " m along links of up to " + fmt_num(lmax) +
+                        " m and a palm row of " + fmt_num(h.spacing) + " m); raise checkpoint_spacing or shorten the hand");
+        }
+        if (jshort >= 0) {
+            if (!key) key = "links";
+            Entry *e = t.get(key);
+            fail_at(e ? e->val->loc : t.n->loc, t.kp(key),
+                    "expected a checkpoint_spacing no longer than every finger link, got " + fmt_num(cps) + " m: link " +
+                        std::to_string(jshort) + " (" + fmt_num(h.link_length[jshort]) +
+                        " m) would have no check point and pass through objects");
+        }
+    }
+
+    /* stage 1: the palm and the fingers (a mounted gripper's fingers are
+     * links of its system: built right after that system's links, before
+     * the next system) */
+    void hand_stage1(const Tab &t, const std::string &ty, Run &run)
+    {
+        cd_hand_desc &h = grip.h;
+        h.type = ty == "soft" ? CD_HAND_SOFT : ty == "tako" ? CD_HAND_TAKO : ty == "space" ? CD_HAND_SPACE : CD_HAND_TORQUE_SWITCH;
+        std::string name;
+        SysInfo *host = hand_mount(t, name);
+        std::string preset = "two_opposed";
+        if (Entry *e = t.get("hand")) preset = choice_of(*e->val, t.kp("hand"), {"two_opposed", "three_120", "two_pairs", "two_interleaved"});
+        h.layout = preset == "two_opposed" ? CD_HAND_TWO_OPPOSED : preset == "three_120" ? CD_HAND_THREE_120
+                 : preset == "two_pairs" ? CD_HAND_TWO_PAIRS : CD_HAND_TWO_INTERLEAVED;
+        hand_geometry(t, h, host != nullptr);
+        const Node *fq0_node = nullptr, *flim_node = nullptr;
+        hand_finger_joint(t, h, fq0_node, flim_node);
+        /* the palm frame on its body (mounted) or the hand's fixed base at palm.position */
+        double pbpos[3] = {0, 0, 0};
+        if (host) cd_v3_copy(pbpos, h.palm_pos);
+        run.palm_rot.assign(h.palm_rot, h.palm_rot + 9);
+        run.palm_pos.assign(pbpos, pbpos + 3);
+        hand_checks(t, h, host, fq0_node, flim_node);
+        h.name = name.c_str();
+        int ncp0 = m->ncp, nshape0 = m->nshape, nbody0 = m->nbody;
+        if (cd_build_hand(m.get(), &h, &grip.hand, &err) < 0) builder_fail(t.n->loc, t.path);
+        h.name = nullptr;
+        /* the loader's names of what the builder made */
         SysInfo Snew;
         SysInfo &S = host ? *host : Snew;
         if (!host) {
             S.name = name;
             S.loc = t.n->loc;
             S.path = t.path;
-            S.id = cd_model_add_system(m.get(), &sd, &err);
-            if (S.id < 0) builder_fail(t.n->loc, t.path);
+            S.id = grip.hand.sys;
             S.add_body("base", m->sys_body_adr[S.id]);
-            attach = S.bodies[0].id;
         }
-        BodyInfo *PB = nullptr;
-        for (auto &bi : S.bodies)
-            if (bi.id == attach) PB = &bi;
-        run.palm = attach;
-        /* a point of the palm frame on the palm body */
-        auto on_palm = [&](const double pl[3], double out[3]) {
-            cd_m3_mulv(out, Rp, pl);
-            cd_v3_add(out, out, pbpos);
-        };
-        double half[3] = {psize[0] / 2, psize[1] / 2, psize[2] / 2};
-        int palm_shape = cd_model_add_shape(m.get(), attach, CD_SHAPE_BOX, pbpos, Rp, half, nullptr, 0, &err);
-        if (palm_shape < 0) builder_fail(t.n->loc, t.path);
-        S.shape_at.emplace("palm", S.shapes.size());
-        S.shapes.push_back({"palm", palm_shape});
-        /* palm-face check points, tops flush with the face y = +size_y/2 */
-        /* two_pairs: two opposed pairs at z = -/+ pair_offset (a wide hand for a bar) */
-        double zoff = 0;
-        if (preset == "two_pairs") zoff = t.num("pair_offset", spacing / 2, Range::Pos);
-        else if (preset == "two_interleaved") {
-            /* the two fingers in parallel planes z = -/+ pair_offset: they pass each other */
-            zoff = t.num("pair_offset", 1.5 * rad, Range::Pos);
-            if (!(zoff > rad)) fail_at(t.get("pair_offset")->val->loc, t.kp("pair_offset"), "expected more than the finger radius " + fmt_num(rad) + " m (the fingers must pass each other), got " + fmt_num(zoff));
-        } else if (Entry *e = t.get("pair_offset")) fail_at(e->kloc, t.kp("pair_offset"), "applies to hand = 'two_pairs' or 'two_interleaved' only");
-        for (int row = 0; row < (preset == "two_pairs" ? 2 : 1); row++)
-            for (double x = -spacing / 2 + cps; x <= spacing / 2 - cps + 1e-12; x += cps) {
-                double pl[3] = {x, half[1] - rad, preset != "two_pairs" ? 0.0 : row == 0 ? -zoff : zoff}, p[3];
-                on_palm(pl, p);
-                if (cd_model_add_checkpoint(m.get(), attach, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
-                PB->ncp++;
-                S.ncp++;
-            }
-        std::vector<std::vector<int>> fingers(nf);
-        for (int f = 0; f < nf; f++) {
-            double phi = preset == "three_120" ? M_PI / 2 + 2 * M_PI * f / 3.0 : (f % 2 == 0 ? M_PI : 0.0);
-            double fz = preset == "two_pairs" ? (f < 2 ? -zoff : zoff) : preset == "two_interleaved" ? (f == 0 ? -zoff : zoff) : 0.0;
-            /* radial direction e_r; the finger closes about e_r x y */
-            double er[3] = {cos(phi), 0, sin(phi)}, ax[3] = {-er[2], 0, er[0]};
-            int parent = attach;
-            for (size_t j = 0; j < L.size(); j++) {
-                cd_link_desc d = cd_link_desc_default();
-                std::string ln = "f" + std::to_string(f) + "_l" + std::to_string(j);
-                if (S.body_at.count(ln)) fail_at(t.n->loc, t.path, "expected a system without a link named '" + ln + "' (the gripper adds it)");
-                d.name = ln.c_str();
-                d.parent = parent;
-                if (j == 0) {
-                    double pl[3] = {er[0] * spacing / 2, half[1], er[2] * spacing / 2 + fz};
-                    on_palm(pl, d.pos);
-                    cd_m3_copy(d.rot, Rp);
-                } else d.pos[1] = L[j - 1];
-                cd_v3_copy(d.axis, ax);
-                d.mass = M[j];
-                d.com[1] = L[j] / 2;
-                if (fq0_node) {
-                    if (fq0.size() != L.size())
-                        fail_at(fq0_node->loc, t.kp("finger_joint") + ".q0_deg", "expected " + std::to_string(L.size()) + " angles (one per finger link), got " + render(*fq0_node));
-                    d.q0 = fq0[j];
-                }
-                if (flim_node) {
-                    size_t k = flim_per_link ? 2 * j : 0;
-                    fjp.lower = flim[k];
-                    fjp.upper = flim[k + 1];
-                    if (d.q0 < fjp.lower - 1e-12 || d.q0 > fjp.upper + 1e-12)
-                        fail_at(fq0_node ? fq0_node->loc : flim_node->loc, t.kp("finger_joint") + (fq0_node ? ".q0_deg" : ".limit_deg"),
-                                std::string("expected initial angles within limit_deg (") + (fq0_node ? "" : "q0_deg defaults to 0, ") + "link " + std::to_string(j) + ": " +
-                                    fmt_num(d.q0 / DEG) + " deg, stops [" + fmt_num(fjp.lower / DEG) + ", " + fmt_num(fjp.upper / DEG) + "]), got " +
-                                    render(fq0_node ? *fq0_node : *flim_node));
-                }
-                double It = M[j] * (3 * rad * rad + L[j] * L[j]) / 12.0, Ia = M[j] * rad * rad / 2;
-                memset(d.inertia, 0, sizeof d.inertia);
-                d.inertia[0] = It; d.inertia[4] = Ia; d.inertia[8] = It;
-                int id = cd_model_add_link(m.get(), S.id, &d, &err);
-                if (id < 0) builder_fail(t.n->loc, t.path);
-                S.add_body(ln, id);
-                double R[9], spos[3] = {0, L[j] / 2, 0}, ssz[3] = {rad, L[j] / 2, 0};
-                cd_m3_from_rpy(R, -M_PI / 2, 0, 0);
-                int sh = cd_model_add_shape(m.get(), id, CD_SHAPE_CAPSULE, spos, R, ssz, nullptr, 0, &err);
-                if (sh < 0) builder_fail(t.n->loc, t.path);
-                S.shape_at.emplace(ln, S.shapes.size());
-                S.shapes.push_back({ln, sh});
-                for (double y = cps; y <= L[j] + 1e-12; y += cps) {
-                    double p[3] = {0, y, 0};
-                    if (cd_model_add_checkpoint(m.get(), id, p, rad, &err) < 0) builder_fail(t.n->loc, t.path);
-                    S.bodies.back().ncp++;
-                    S.ncp++;
-                }
-                if (fj_any && cd_model_set_joint(m.get(), id, &fjp, &err) != CD_OK) builder_fail(t.n->loc, t.path);
-                fingers[f].push_back(id);
-                parent = id;
-            }
+        for (int b = nbody0; b < m->nbody; b++) S.add_body(m->body_name[b], b);
+        for (int k = nshape0; k < m->nshape; k++) {
+            std::string sn = k == grip.hand.palm_shape ? "palm" : m->body_name[m->shape_body[k]];
+            S.shape_at.emplace(sn, S.shapes.size());
+            S.shapes.push_back({sn, k});
+        }
+        for (int c = ncp0; c < m->ncp; c++) {
+            for (auto &bi : S.bodies)
+                if (bi.id == m->cp_body[c]) bi.ncp++;
+            S.ncp++;
         }
         if (!host) {
             sys_at.emplace(S.name, sys.size());
             sys.push_back(S);
         }
-        run.hand = S.id;
-        grip.name = name;
-        grip.L = L;
-        grip.M = M;
-        grip.fingers = fingers;
-        grip.nf = nf;
-        grip.sys = S.id;
-        grip.rad = rad;
-        if (stage == 1) return;
-      }
-        const std::string name = grip.name;
-        const std::vector<double> &L = grip.L, &M = grip.M;
-        const std::vector<std::vector<int>> &fingers = grip.fingers;
-        const int nf = grip.nf;
-        /* the drive */
-        double T = t.num("torque", 0.2, Range::Any), open_at = t.num("open_at", 0.0, Range::NonNeg);
-        double ctime = 1.0, cangle = 120.0 * DEG, cstart = 0.0;
+        run.palm = grip.hand.palm;
+        run.hand = grip.hand.sys;
+    }
+
+    /* stage 2: the drive and the contact pairs (after every system) */
+    void hand_stage2(const Tab &t, const std::string &ty, const LawState &def, Run &run)
+    {
+        cd_hand_desc &h = grip.h;
+        h.torque = t.num("torque", 0.2, Range::Any);
+        h.open_at = t.num("open_at", 0.0, Range::NonNeg);
         if (Entry *e = t.get("close")) {
             std::string cp = t.kp("close");
             Tab ct(table_of(*e->val, cp), cp, {"time", "angle_deg", "start", "on"});
             if (Entry *o = ct.get("on")) run.close_trigger = choice_of(*o->val, ct.kp("on"), {"time", "trigger"}) == "trigger";
             if (run.close_trigger && ct.get("start")) fail_at(ct.get("start")->kloc, ct.kp("start"), "does not apply with on = 'trigger' (the [control] grasp trigger starts the closing)");
-            if (run.close_trigger && open_at > 0) fail_at(t.get("open_at")->kloc, t.kp("open_at"), "does not apply with close.on = 'trigger'");
-            ctime = ct.num("time", ctime, Range::Pos);
-            cangle = ct.num("angle_deg", 120.0, Range::Pos) * DEG;
-            cstart = ct.num("start", 0.0, Range::NonNeg);
+            if (run.close_trigger && h.open_at > 0) fail_at(t.get("open_at")->kloc, t.kp("open_at"), "does not apply with close.on = 'trigger'");
+            h.close_time = ct.num("time", h.close_time, Range::Pos);
+            h.close_angle = ct.num("angle_deg", 120.0, Range::Pos) * DEG;
+            h.close_start = ct.num("start", 0.0, Range::NonNeg);
         }
-        if (open_at > 0 && open_at <= cstart + ctime)
-            fail_at(t.get("open_at")->val->loc, t.kp("open_at"), "expected open_at after the closing ends (" + fmt_num(cstart + ctime) + " s)");
-        std::vector<double> ratio;
-        size_t n = L.size();
+        h.close_on_trigger = run.close_trigger ? 1 : 0;
+        if (h.open_at > 0 && h.open_at <= h.close_start + h.close_time)
+            fail_at(t.get("open_at")->val->loc, t.kp("open_at"), "expected open_at after the closing ends (" + fmt_num(h.close_start + h.close_time) + " s)");
         if (Entry *e = t.get("ratios")) {
-            if (e->val->kind != NK::Array || e->val->arr.size() != n)
-                fail_at(e->val->loc, t.kp("ratios"), "expected " + std::to_string(n) + " ratios (base to tip), got " + render(*e->val));
-            for (size_t i = 0; i < n; i++) ratio.push_back(num_of(*e->val->arr[i], idx(t.kp("ratios"), i), Range::Pos));
-        } else {
-            for (size_t j = 0; j < n; j++) ratio.push_back((double)((n - j) * (n - j))); /* quadratic, tip 1 */
+            if (e->val->kind != NK::Array || e->val->arr.size() != (size_t)h.nlink)
+                fail_at(e->val->loc, t.kp("ratios"), "expected " + std::to_string(h.nlink) + " ratios (base to tip), got " + render(*e->val));
+            for (int i = 0; i < h.nlink; i++) h.ratio[i] = num_of(*e->val->arr[i], idx(t.kp("ratios"), i), Range::Pos);
         }
-        double Ts = 0, w0 = 0;
         if (Entry *e = t.get("motor")) {
             std::string mp = t.kp("motor");
             Tab mt(table_of(*e->val, mp), mp, {"stall_torque", "noload_speed"});
-            Ts = mt.need_num("stall_torque", Range::Pos);
-            w0 = mt.need_num("noload_speed", Range::Pos);
+            h.stall_torque = mt.need_num("stall_torque", Range::Pos);
+            h.noload_speed = mt.need_num("noload_speed", Range::Pos);
         }
         if (ty == "soft" || ty == "tako") {
             if (t.get("clutch")) fail_at(t.get("clutch")->kloc, t.kp("clutch"), "applies to 'space' and 'torque_switch' grippers only");
-            std::vector<double> st = {cstart}, sv = {T};
-            if (open_at > 0) { st.push_back(open_at); sv.push_back(-T); }
-            std::vector<int> jb;
-            std::vector<double> jr;
-            for (int f = 0; f < nf; f++) {
-                if (ty == "soft") { jb.clear(); jr.clear(); }
-                for (size_t j = 0; j < n; j++) { jb.push_back(fingers[f][j]); jr.push_back(ratio[j]); }
-                if (ty == "soft" || f == nf - 1) {
-                    cd_actuator_desc a = cd_actuator_desc_default();
-                    std::string an = name + (ty == "soft" ? "/f" + std::to_string(f) + "_motor" : "/motor");
-                    a.name = an.c_str();
-                    a.type = CD_ACT_STEPS;
-                    a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
-                    if (run.close_trigger) { a.type = CD_ACT_NONE; a.ntbl = 0; } /* u = ctrl, from the [control] trigger */
-                    if (cstart > 0) { /* no torque before the closing starts */
-                        st.insert(st.begin(), 0.0); sv.insert(sv.begin(), 0.0);
-                        a.tbl_t = st.data(); a.tbl_v = sv.data(); a.ntbl = (int)st.size();
-                    }
-                    a.ntrn = (int)jb.size(); a.trn_body = jb.data(); a.trn_ratio = jr.data();
-                    a.stall_torque = Ts; a.noload_speed = w0;
-                    int aid = cd_model_add_actuator(m.get(), &a, &err);
-                    if (aid < 0) builder_fail(t.n->loc, t.path);
-                    run.close_act.push_back(aid);
-                    run.close_u.push_back(T);
-                    if (cstart > 0) { st.erase(st.begin()); sv.erase(sv.begin()); }
-                }
-            }
-        } else {
-            double thr = 0.05, Kw = 20.0, Dw = -1, lim = 0;
-            if (Entry *e = t.get("clutch")) {
-                std::string cp = t.kp("clutch");
-                Tab ct(table_of(*e->val, cp), cp, {"threshold", "wire_stiffness", "wire_damping", "torque_limit"});
-                thr = ct.num("threshold", thr, Range::Pos);
-                Kw = ct.num("wire_stiffness", Kw, Range::Pos);
-                Dw = ct.num("wire_damping", -1, Range::NonNeg);
-                lim = ct.num("torque_limit", 0.0, Range::NonNeg);
-            }
-            if (Ts > 0 && lim == 0) lim = Ts; /* the motor's stall torque limits the coupling */
-            /* the motor turns the synchronising pulley: the closing cannot be
-             * faster than its no-load speed */
-            if (w0 > 0 && cangle / ctime > w0) ctime = cangle / w0;
-            std::vector<double> st = {0.0}, sq = {0.0};
-            if (cstart > 0) { st.push_back(cstart); sq.push_back(0.0); }
-            st.push_back(cstart + ctime); sq.push_back(cangle);
-            if (open_at > 0) { st.push_back(open_at); sq.push_back(cangle); st.push_back(open_at + ctime); sq.push_back(0.0); }
-            for (int f = 0; f < nf; f++) {
-                cd_finger_desc fd = cd_finger_desc_default();
-                std::string fname = name + "/f" + std::to_string(f);
-                /* the default wire damping: critical for the finger's links about the base joint */
-                double I = 0, arm = 0;
-                for (size_t j = 0; j < n; j++) { I += M[j] * (arm + L[j] / 2) * (arm + L[j] / 2); arm += L[j]; }
-                fd.name = fname.c_str();
-                fd.type = ty == "space" ? CD_FINGER_SPACE : CD_FINGER_TORQUE_SWITCH;
-                fd.njoint = (int)n;
-                fd.joint_body = fingers[f].data();
-                fd.ratio = ratio.data();
-                fd.wire_K = Kw;
-                fd.wire_D = Dw >= 0 ? Dw : 2.0 * sqrt(Kw * I);
-                fd.threshold = thr;
-                fd.grasp_torque = T;
-                fd.torque_limit = lim;
-                fd.sched_t = st.data(); fd.sched_q = sq.data(); fd.nsched = (int)st.size();
-                fd.open_at = open_at;
-                int fid = cd_model_add_finger(m.get(), &fd, &err);
-                if (fid < 0) builder_fail(t.n->loc, t.path);
-                if (run.close_trigger) run.close_finger.push_back(fid); /* its schedule starts at the trigger */
-            }
+        } else if (Entry *e = t.get("clutch")) {
+            std::string cp = t.kp("clutch");
+            Tab ct(table_of(*e->val, cp), cp, {"threshold", "wire_stiffness", "wire_damping", "torque_limit"});
+            h.clutch_threshold = ct.num("threshold", h.clutch_threshold, Range::Pos);
+            h.wire_stiffness = ct.num("wire_stiffness", h.wire_stiffness, Range::Pos);
+            h.wire_damping = ct.num("wire_damping", -1, Range::NonNeg);
+            h.torque_limit = ct.num("torque_limit", 0.0, Range::NonNeg);
         }
-        /* pairs: the hand's check points against every target shape, and each
-         * finger's check points against the other fingers' links (fingers that
-         * wrap past each other touch: they must not pass through) */
-        int lid = cd_model_add_law(m.get(), &def.law, &err);
-        if (lid < 0) builder_fail(t.n->loc, t.path);
-        for (int f = 0; f < nf; f++)
-            for (int g = 0; g < nf; g++) {
-                if (g == f) continue;
-                {   /* fingers that turn in parallel planes farther apart than two radii never meet */
-                    int bf = fingers[f][0], bg = fingers[g][0];
-                    double af[3], ag[3], cr[3], dp[3];
-                    cd_m3_mulv(af, m->body_jnt_rot + 9 * bf, m->body_axis + 3 * bf);
-                    cd_m3_mulv(ag, m->body_jnt_rot + 9 * bg, m->body_axis + 3 * bg);
-                    cd_v3_cross(cr, af, ag);
-                    cd_v3_sub(dp, m->body_jnt_pos + 3 * bf, m->body_jnt_pos + 3 * bg);
-                    if (cd_v3_norm(cr) < 1e-9 && std::fabs(cd_v3_dot(dp, af)) > 2 * grip.rad + 1e-12) continue;
-                }
-                for (int b : fingers[f])
-                    for (int c : fingers[g]) {
-                        int shp = -1;
-                        for (int k = 0; k < m->nshape; k++)
-                            if (m->shape_body[k] == c) shp = k;
-                        if (shp >= 0 && cd_model_add_pair(m.get(), grip.sys, b, shp, lid, &err) < 0) builder_fail(t.n->loc, t.path);
-                    }
-            }
-        for (auto &s2 : sys) {
-            if (!s2.is_target) continue;
-            for (auto &sh : s2.shapes)
-                if (cd_model_add_pair(m.get(), grip.sys, -1, sh.second, lid, &err) < 0) builder_fail(t.n->loc, t.path);
+        std::vector<int> targets;
+        for (auto &s2 : sys)
+            if (s2.is_target) targets.push_back(s2.id);
+        if (cd_build_hand_drive(m.get(), &h, &grip.hand, &def.law, targets.data(), (int)targets.size(), &err) != CD_OK)
+            builder_fail(t.n->loc, t.path);
+        for (int k = 0; k < grip.hand.nact; k++) {
+            run.close_act.push_back(grip.hand.act[k]);
+            run.close_u.push_back(grip.hand.act_close_u[k]);
         }
+        if (run.close_trigger)
+            for (int k = 0; k < grip.hand.nclutch; k++) run.close_finger.push_back(grip.hand.clutch[k]); /* its schedule starts at the trigger */
     }
 
+    /* stage 1, stage 2 or 0: both */
+    void gripper_hand(const Tab &t, const std::string &ty, const LawState &def, Run &run, int stage = 0)
+    {
+        if (stage != 2) hand_stage1(t, ty, run);
+        if (stage != 1) hand_stage2(t, ty, def, run);
+    }
     /* [control]: the built-in capture controller (control.h, docs/capture.md) */
     void control(Entry &e, Run &run)
     {
@@ -2378,6 +2288,131 @@ struct Builder {
         }
     }
 
+    /* [simulation]: the run's options, duration and sampling, its work budget */
+    void simulation(const Tab &top, Run &run)
+    {
+        Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
+        Tab t(&sn, "simulation",
+              {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
+               "event_tol", "dwell", "v_reg", "fd_eps", "jacobian", "output_dt", "flush_every", "event_capacity",
+               "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
+        cd_options &o = m->opt;
+        run.duration = t.need_num("duration", Range::Pos);
+        t.vec("gravity", 3, m->gravity);
+        if (Entry *e = t.get("integrator")) {
+            std::vector<std::string> names;
+            for (int i = 0; i < CD_STEP_NTYPES; i++) names.push_back(cd_stepper_name((cd_stepper)i));
+            o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
+        }
+        o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
+        if (o.rtol > 0 && o.rtol < CD_RTOL_MIN)
+            fail_at(t.get("rtol") ? t.get("rtol")->val->loc : sn.loc, t.kp("rtol"),
+                    "expected 0 or a value in [" + fmt_num(CD_RTOL_MIN) +
+                        ", inf) (a tighter relative tolerance cannot be met in double precision), got " + fmt_num(o.rtol));
+        o.atol = t.num("atol", o.atol, Range::NonNeg);
+        if (!(o.rtol + o.atol > 0))
+            fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");
+        o.h_init = t.num("h_init", o.h_init, Range::Pos);
+        o.h_max = t.num("h_max", o.h_max, Range::NonNeg);
+        o.h_min = t.num("h_min", o.h_min, Range::NonNeg);
+        if (o.h_max > 0 && o.h_min > o.h_max)
+            fail_at(t.get("h_min") ? t.get("h_min")->val->loc : sn.loc, t.kp("h_min"),
+                    "expected h_min <= h_max = " + fmt_num(o.h_max) + ", got " + fmt_num(o.h_min));
+        o.h_fixed = t.num("h_fixed", o.h_fixed, Range::Pos);
+        if (Entry *e = t.get("max_steps")) o.max_steps = (long)int_of(*e->val, t.kp("max_steps"), 1);
+        o.event_tol = t.num("event_tol", o.event_tol, Range::Pos);
+        o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
+        o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
+        o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
+        if (Entry *e = t.get("jacobian"))
+            o.jacobian = choice_of(*e->val, t.kp("jacobian"), {"model", "fd"}) == "fd" ? CD_JAC_FD : CD_JAC_MODEL;
+        if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
+        run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
+        /* the sample count must be a sane integer (the CLI converts it) */
+        if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
+            Entry *e = t.get("output_dt");
+            if (!e) e = t.get("duration");
+            fail_at(e ? e->val->loc : sn.loc, t.kp("output_dt"),
+                    "expected a value in [duration / 1e9, inf) = [" + fmt_num(run.duration / CD_SCENARIO_MAX_SAMPLES) +
+                        ", inf) s (at most 1e9 samples for duration = " + fmt_num(run.duration) + " s), got " +
+                        fmt_num(run.output_dt));
+        }
+        run.flush_every = t.num("flush_every", 1.0, Range::Pos);
+        /* samples: "stop" (the integrator ends a step at each) or
+         * "interpolate" (dense output); the stiff stepper interpolates by default */
+        run.interpolate = o.stepper == CD_STEP_ROS34PW2 || o.stepper == CD_STEP_AUTO;
+        if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
+        if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
+            Entry *e = t.get("sampling");
+            fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
+        }
+        if (Entry *e = t.get("compress")) run.no_compress = !bool_of(*e->val, t.kp("compress"));
+        work_budget(t, sn, run);
+        if (Entry *e = t.get("event_capacity")) {
+            long long v = int_of(*e->val, t.kp("event_capacity"), 1);
+            if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
+            run.event_capacity = (int)v;
+        }
+    }
+
+    /* [capture]: the verdict's object and thresholds (verdict.h) */
+    void capture(const Tab &top, Run &run)
+    {
+    for (auto &s2 : sys)
+        if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
+    if (Entry *e = top.get("capture")) {
+        Tab t(table_of(*e->val, "capture"), "capture", {"object", "feature", "v_max", "w_max", "dwell", "workspace"});
+        if (Entry *o = t.get("object")) {
+            std::string on = str_of(*o->val, t.kp("object"));
+            SysInfo *os = find_sys(on);
+            if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
+            if (m->sys_base_type[os->id] != CD_BASE_FREE)
+                fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
+            run.object = os->id;
+        }
+        if (Entry *f = t.get("feature")) {
+            std::string fn = str_of(*f->val, t.kp("feature"));
+            SysInfo *os = run.object >= 0 ? &sys[0] : nullptr;
+            for (auto &s2 : sys)
+                if (s2.id == run.object) os = &s2;
+            if (!os || !os->shape_at.count(fn))
+                fail_at(f->val->loc, t.kp("feature"), "expected the name of a shape of the object" +
+                                                         (os ? " '" + os->name + "'" + hint(fn, os->shape_names()) : std::string()) +
+                                                         ", got '" + fn + "'");
+            run.feature = os->shapes[os->shape_at[fn]].second;
+        }
+        run.v_max = t.num("v_max", run.v_max, Range::Pos);
+        run.w_max = t.num("w_max", run.w_max, Range::Pos);
+        run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
+        run.workspace = t.num("workspace", run.workspace, Range::Pos);
+    }
+    }
+
+    /* [gripper] of type 'torque' (the hand is a [[system]]) or the rest of a
+     * generated hand (stage 1 was built after its host system, if mounted) */
+    void gripper(const Tab &t, const std::string &ty, const std::string &gsys, bool mounted, const LawState &def, Run &run)
+    {
+        if (ty == "torque") {
+            for (auto &k : t.n->tab)
+                if (k.key != "type" && k.key != "system")
+                    fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
+            if (Entry *g = t.get("system")) {
+                std::string gs = str_of(*g->val, t.kp("system"));
+                if (!find_sys(gs))
+                    fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
+                run.hand = find_sys(gs)->id;
+            }
+            /* type "torque": the joints are driven by their own `actuator` tables */
+        } else {
+            if (!gsys.empty() && !mounted) {
+                /* not a [[system]] (a target, or no such name): stage 1 says why */
+                gripper_hand(t, ty, def, run, 1);
+                fail_at(t.get("system")->val->loc, t.kp("system"), "expected a [[system]] name, got '" + gsys + "'");
+            }
+            gripper_hand(t, ty, def, run, mounted ? 2 : 0);
+        }
+    }
+
     void build(Node &root, Run &run, const std::string &path)
     {
         m.reset(cd_model_create());
@@ -2394,71 +2429,7 @@ struct Builder {
             run.title = std::filesystem::path(path).stem().string();
         }
 
-        /* [simulation] */
-        {
-            Node &sn = *table_of(top.need("simulation", "a [simulation] table with at least duration"), "simulation");
-            Tab t(&sn, "simulation",
-                  {"duration", "gravity", "integrator", "rtol", "atol", "h_init", "h_max", "h_min", "h_fixed", "max_steps",
-                   "event_tol", "dwell", "v_reg", "fd_eps", "jacobian", "output_dt", "flush_every", "event_capacity",
-                   "equilibrium_start", "max_wall_time", "max_rhs_evals", "sampling", "compress"});
-            cd_options &o = m->opt;
-            run.duration = t.need_num("duration", Range::Pos);
-            t.vec("gravity", 3, m->gravity);
-            if (Entry *e = t.get("integrator")) {
-                std::vector<std::string> names;
-                for (int i = 0; i < CD_STEP_NTYPES; i++) names.push_back(cd_stepper_name((cd_stepper)i));
-                o.stepper = (cd_stepper)cd_stepper_from_name(choice_of(*e->val, t.kp("integrator"), names).c_str());
-            }
-            o.rtol = t.num("rtol", o.rtol, Range::NonNeg);
-            if (o.rtol > 0 && o.rtol < CD_RTOL_MIN)
-                fail_at(t.get("rtol") ? t.get("rtol")->val->loc : sn.loc, t.kp("rtol"),
-                        "expected 0 or a value in [" + fmt_num(CD_RTOL_MIN) +
-                            ", inf) (a tighter relative tolerance cannot be met in double precision), got " + fmt_num(o.rtol));
-            o.atol = t.num("atol", o.atol, Range::NonNeg);
-            if (!(o.rtol + o.atol > 0))
-                fail_at(t.get("atol") ? t.get("atol")->val->loc : sn.loc, t.kp("atol"), "expected rtol + atol > 0, got both 0");
-            o.h_init = t.num("h_init", o.h_init, Range::Pos);
-            o.h_max = t.num("h_max", o.h_max, Range::NonNeg);
-            o.h_min = t.num("h_min", o.h_min, Range::NonNeg);
-            if (o.h_max > 0 && o.h_min > o.h_max)
-                fail_at(t.get("h_min") ? t.get("h_min")->val->loc : sn.loc, t.kp("h_min"),
-                        "expected h_min <= h_max = " + fmt_num(o.h_max) + ", got " + fmt_num(o.h_min));
-            o.h_fixed = t.num("h_fixed", o.h_fixed, Range::Pos);
-            if (Entry *e = t.get("max_steps")) o.max_steps = (long)int_of(*e->val, t.kp("max_steps"), 1);
-            o.event_tol = t.num("event_tol", o.event_tol, Range::Pos);
-            o.dwell = t.num("dwell", o.dwell, Range::NonNeg);
-            o.v_reg = t.num("v_reg", o.v_reg, Range::Pos);
-            o.fd_eps = t.num("fd_eps", o.fd_eps, Range::Pos);
-            if (Entry *e = t.get("jacobian"))
-                o.jacobian = choice_of(*e->val, t.kp("jacobian"), {"model", "fd"}) == "fd" ? CD_JAC_FD : CD_JAC_MODEL;
-            if (Entry *e = t.get("equilibrium_start")) o.equilibrium_start = bool_of(*e->val, t.kp("equilibrium_start")) ? 1 : 0;
-            run.output_dt = t.num("output_dt", run.duration / 1000.0, Range::Pos);
-            /* the sample count must be a sane integer (the CLI converts it) */
-            if (!(run.duration / run.output_dt <= CD_SCENARIO_MAX_SAMPLES)) {
-                Entry *e = t.get("output_dt");
-                if (!e) e = t.get("duration");
-                fail_at(e ? e->val->loc : sn.loc, t.kp("output_dt"),
-                        "expected a value in [duration / 1e9, inf) = [" + fmt_num(run.duration / CD_SCENARIO_MAX_SAMPLES) +
-                            ", inf) s (at most 1e9 samples for duration = " + fmt_num(run.duration) + " s), got " +
-                            fmt_num(run.output_dt));
-            }
-            run.flush_every = t.num("flush_every", 1.0, Range::Pos);
-            /* samples: "stop" (the integrator ends a step at each) or
-             * "interpolate" (dense output); the stiff stepper interpolates by default */
-            run.interpolate = o.stepper == CD_STEP_ROS34PW2 || o.stepper == CD_STEP_AUTO;
-            if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
-            if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
-                Entry *e = t.get("sampling");
-                fail_at(e ? e->val->loc : sn.loc, t.kp("sampling"), "expected \"stop\" with integrator = \"rk4\" (fixed steps land on the samples), got \"interpolate\"");
-            }
-            if (Entry *e = t.get("compress")) run.no_compress = !bool_of(*e->val, t.kp("compress"));
-            work_budget(t, sn, run);
-            if (Entry *e = t.get("event_capacity")) {
-                long long v = int_of(*e->val, t.kp("event_capacity"), 1);
-                if (v > 100000000LL) fail_at(e->val->loc, t.kp("event_capacity"), "expected an integer in [1, 1e8], got " + render(*e->val));
-                run.event_capacity = (int)v;
-            }
-        }
+        simulation(top, run);
 
         /* [contact] defaults */
         LawState def;
@@ -2509,59 +2480,9 @@ struct Builder {
         }
 
         /* [gripper] */
-        if (gt) {
-            const Tab &t = *gt;
-            const std::string &ty = gty;
-            if (ty == "torque") {
-                for (auto &k : t.n->tab)
-                    if (k.key != "type" && k.key != "system")
-                        fail_at(k.kloc, t.kp(k.key.c_str()), "does not apply to a 'torque' gripper (its hand is a [[system]] with link actuators)");
-                if (Entry *g = t.get("system")) {
-                    std::string gs = str_of(*g->val, t.kp("system"));
-                    if (!find_sys(gs))
-                        fail_at(g->val->loc, t.kp("system"), "expected the name of a system, got '" + gs + "'" + hint(gs, sys_names()));
-                    run.hand = find_sys(gs)->id;
-                }
-                /* type "torque": the joints are driven by their own `actuator` tables */
-            } else {
-                if (!gsys.empty() && !mounted) {
-                    /* not a [[system]] (a target, or no such name): stage 1 says why */
-                    gripper_hand(t, ty, def, run, 1);
-                    fail_at(t.get("system")->val->loc, t.kp("system"), "expected a [[system]] name, got '" + gsys + "'");
-                }
-                gripper_hand(t, ty, def, run, mounted ? 2 : 0);
-            }
-        }
+        if (gt) gripper(*gt, gty, gsys, mounted, def, run);
 
-        /* [capture]: the verdict's object and thresholds (verdict.h) */
-        for (auto &s2 : sys)
-            if (s2.is_target && run.object < 0 && m->sys_base_type[s2.id] == CD_BASE_FREE) run.object = s2.id;
-        if (Entry *e = top.get("capture")) {
-            Tab t(table_of(*e->val, "capture"), "capture", {"object", "feature", "v_max", "w_max", "dwell", "workspace"});
-            if (Entry *o = t.get("object")) {
-                std::string on = str_of(*o->val, t.kp("object"));
-                SysInfo *os = find_sys(on);
-                if (!os) fail_at(o->val->loc, t.kp("object"), "expected the name of a system, got '" + on + "'" + hint(on, sys_names()));
-                if (m->sys_base_type[os->id] != CD_BASE_FREE)
-                    fail_at(o->val->loc, t.kp("object"), "expected a free-floating system, got '" + on + "' (fixed base)");
-                run.object = os->id;
-            }
-            if (Entry *f = t.get("feature")) {
-                std::string fn = str_of(*f->val, t.kp("feature"));
-                SysInfo *os = run.object >= 0 ? &sys[0] : nullptr;
-                for (auto &s2 : sys)
-                    if (s2.id == run.object) os = &s2;
-                if (!os || !os->shape_at.count(fn))
-                    fail_at(f->val->loc, t.kp("feature"), "expected the name of a shape of the object" +
-                                                             (os ? " '" + os->name + "'" + hint(fn, os->shape_names()) : std::string()) +
-                                                             ", got '" + fn + "'");
-                run.feature = os->shapes[os->shape_at[fn]].second;
-            }
-            run.v_max = t.num("v_max", run.v_max, Range::Pos);
-            run.w_max = t.num("w_max", run.w_max, Range::Pos);
-            run.dwell = t.num("dwell", run.dwell, Range::NonNeg);
-            run.workspace = t.num("workspace", run.workspace, Range::Pos);
-        }
+        capture(top, run);
         if (run.hand == run.object) run.object = -1;
 
         /* [control] (after the gripper: it closes the gripper's motors) */
