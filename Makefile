@@ -134,6 +134,7 @@ test: deps
 	CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
+	@$(MAKE) --no-print-directory python-test
 	@$(MAKE) --no-print-directory install-check
 
 asan: deps
@@ -201,6 +202,18 @@ $(SO) $(SO_IO): %.so: %.so.$(VERSION)
 	ln -sf $(notdir $*).so.$(SOVERSION) $@
 
 shared: $(SO) $(SO_IO)
+
+# The Python package (python/, docs/python.md): a virtual environment with
+# the pinned PyPI packages of python/requirements.txt and the package built
+# against these headers and shared libraries (scripts/install-python-deps.sh,
+# Debian's python3-venv/python3-dev only when missing), then its pytest suite
+# (pytest prints its closing line). PYTEST_ARGS adds pytest options.
+VENV ?= $(BUILD)/venv
+python-test: deps
+	@$(MAKE) --no-print-directory $(CLI) $(SO) $(SO_IO)
+	@BUILD=$(BUILD) VENV=$(VENV) bash scripts/install-python-deps.sh
+	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) CAPDYN_BUILD=$(abspath $(BUILD)) CC="$(CC)" \
+	  $(VENV)/bin/pytest -p no:cacheprovider python/tests $(PYTEST_ARGS)
 
 install: check-deps $(LIB) $(LIB_IO) $(CLI) $(SO) $(SO_IO)
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/capdyn $(DESTDIR)$(PCDIR) $(DESTDIR)$(BINDIR)

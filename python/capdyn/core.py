@@ -242,6 +242,10 @@ class _ModelView:
         m = self._live()
         return [_str(m.body_name[i]) for i in range(m.nbody)]
 
+    def base_body(self, s):
+        """Body id of system s's base (bodies of a system are contiguous, the base first)."""
+        return self._live().sys_body_adr[self._sys(s)]
+
     def body_id(self, name):
         """Body id from "system/body" or a unique body name; KeyError if none."""
         i = lib.cd_model_body_id(self._live(), _cstr(name, "body name"))
@@ -956,6 +960,10 @@ class Simulation:
             if self._ctl is not None:
                 lib.cd_ctrl_state_set(self._ctl, ffi.cast("double *", ffi.from_buffer(saved)), ffi.NULL)
             _raise(st, err)
+        if self._ctl is not None:
+            # again after cd_state_set, whose evaluation ran the controller
+            # (as tests/test_capture.c restores: data, then controller)
+            lib.cd_ctrl_state_set(self._ctl, p + lib.cd_state_size(self._m), ffi.NULL)
 
     def state_copy(self, other):
         """Takes the complete state of another simulation of the same model
