@@ -1085,7 +1085,8 @@ class Simulation:
 
     def run(self, until=None, until_verdict=False, dt=None, interpolate=None, on_sample=None):
         """Runs as `capdyn run` does (src/cli/run.c): samples at k dt, the
-        last exactly at `until`; the capture monitor and the controller's
+        last exactly at `until` (a run continued from t > 0 takes the
+        sample times after t); the capture monitor and the controller's
         figures of merit look at every sample; with until_verdict the run
         ends at the monitor's verdict. Defaults from the scenario
         (duration, output_dt, sampling); a Model's simulation needs until
@@ -1107,6 +1108,8 @@ class Simulation:
         until, dt = _real(until, "until"), _real(dt, "dt")
         if not (until > 0 and dt > 0):
             raise ValueError("run: until and dt must be positive")
+        if not until > d.t:
+            raise ValueError(f"run: until = {until:g} s is not after the current time {d.t:g} s")
         if not (until / dt <= 1e9):
             raise ValueError(f"run: until / dt = {until / dt:g} samples is more than 1e9")
         if interpolate is None:
@@ -1148,6 +1151,8 @@ class Simulation:
                     tn = until if i == nout else float(i) * dt
                     if tn > until:
                         tn = until
+                    if tn <= d.t:  # a run continued: the sample times still ahead
+                        continue
                     st = lib.cd_sim_advance(self._m, d, tn, lib._cd_py_step, self._self_h, err)
                     if st != lib.CD_OK:
                         break
