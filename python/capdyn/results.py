@@ -130,7 +130,8 @@ class Results:
 
     def events(self):
         """export events: t kind kind_name slot mode_from mode_to x fn ft body_a
-        body_b owner_kind owner (kind_name and owner_kind as strings)."""
+        body_b owner_kind owner (kind_name, body_a, body_b -- full body names --
+        and owner_kind as strings; the ids are in self.file["/events"])."""
         if "/events" not in self.file or self.nevents == 0:
             return {k: np.zeros(0) for k in "t kind kind_name slot mode_from mode_to x fn ft body_a body_b "
                     "owner_kind owner".split()}
@@ -141,8 +142,11 @@ class Results:
         for k in ("t", "kind"):
             out[k] = np.asarray(e[k])
         out["kind_name"] = np.array([ffi.string(lib.cd_event_kind_name(int(x))).decode() for x in e["kind"]])
-        for k in ("slot", "mode_from", "mode_to", "x", "fn", "ft", "body_a", "body_b"):
+        for k in ("slot", "mode_from", "mode_to", "x", "fn", "ft"):
             out[k] = np.asarray(e[k])
+        full = [_token(b["full_name"]) for b in self.file["/model/bodies"][:]]
+        for k in ("body_a", "body_b"):  # as export: the body's full name (system/body), "-" for none
+            out[k] = np.array([full[int(i)] if 0 <= int(i) < len(full) else "-" for i in e[k]])
         ok = e["owner_kind"] if "owner_kind" in names else np.zeros(e.size, int)
         out["owner_kind"] = np.array([ffi.string(lib.cd_owner_kind_name(int(x))).decode() for x in ok])
         out["owner"] = np.asarray(e["owner"]) if "owner" in names else np.zeros(e.size, int)
