@@ -242,6 +242,17 @@ class _ModelView:
         m = self._live()
         return [_str(m.body_name[i]) for i in range(m.nbody)]
 
+    def slot_bodies(self):
+        """(nslot, 2) int array: each contact slot's check-point body and shape body."""
+        m = self._live()
+        return np.array([[m.cp_body[m.slot_cp[k]], m.shape_body[m.slot_shape[k]]] for k in range(m.nslot)],
+                        dtype=np.int64).reshape(m.nslot, 2)
+
+    def body_systems(self):
+        """(nbody) int array: the system of each body."""
+        m = self._live()
+        return np.array([m.body_sys[i] for i in range(m.nbody)], dtype=np.int64)
+
     def base_body(self, s):
         """Body id of system s's base (bodies of a system are contiguous, the base first)."""
         return self._live().sys_body_adr[self._sys(s)]
@@ -558,6 +569,8 @@ class Scenario(_ModelView):
     interpolate = property(lambda s: bool(s._s().interpolate), doc="samples by dense output")
     has_capture = property(lambda s: s._s().capture_hand >= 0 and s._s().capture_object >= 0)
     has_control = property(lambda s: s._s().control != ffi.NULL)
+    capture_hand = property(lambda s: s._s().capture_hand, doc="system of the [gripper]'s hand, -1 if none")
+    capture_object = property(lambda s: s._s().capture_object, doc="the system it is to capture, -1 if none")
     max_rhs_evals = property(lambda s: s._s().max_rhs_evals)
     max_wall_time = property(lambda s: s._s().max_wall_time)
 
