@@ -10,10 +10,10 @@ See docs/python.md. The engine is libcapdyn_io.so / libcapdyn.so through
 cffi (API mode); capdyn.ffi and capdyn.lib give the raw C API.
 """
 from ._capdyn import ffi, lib
-from .core import (CapdynError, Capture, Model, Options, RunResult, Scenario, Simulation, SystemState, load,
-                   loads, version)
+from .core import (HAVE_BUILDERS, CapdynError, Capture, Hand, Model, Options, RunResult, Scenario, Simulation,
+                   SystemState, load, loads, version)
 from .results import Results
 
 __version__ = "0.1.0"
-__all__ = ["CapdynError", "Capture", "Model", "Options", "RunResult", "Scenario", "Simulation", "SystemState",
+__all__ = ["HAVE_BUILDERS", "Hand", "CapdynError", "Capture", "Model", "Options", "RunResult", "Scenario", "Simulation", "SystemState",
            "Results", "load", "loads", "version", "ffi", "lib"]

@@ -309,6 +309,103 @@ extern "Python" int _cd_py_sample(const cd_model *m, const cd_data *sample, void
 extern "Python" void _cd_py_control(const cd_model *m, cd_data *d, void *user);
 """
 
+# The builders (include/capdyn/build.h: hands, targets, chasers), when the
+# headers have them: declared only then, so that the package also builds
+# against a capdyn without them (capdyn.HAVE_BUILDERS tells).
+BUILD_CDEF = r"""
+typedef struct {
+    int type;
+    double pos[3];
+    double rot[9];
+    double radius, length;
+    double size[3];
+    double height, post;
+    const double *verts;
+    int nvert;
+    ...;
+} cd_shape_desc;
+cd_shape_desc cd_shape_desc_default(void);
+int cd_build_shape(cd_model *m, int body, const cd_shape_desc *s, cd_error *err);
+int cd_shape_desc_count(const cd_shape_desc *s);
+typedef struct {
+    const char *name;
+    int fixed;
+    double mass;
+    double inertia[9];
+    double pos[3];
+    double quat[4];
+    double vel[3];
+    double angvel[3];
+    int prescribed;
+    const cd_shape_desc *shapes;
+    int nshape;
+    ...;
+} cd_target_desc;
+cd_target_desc cd_target_desc_default(void);
+int cd_build_target(cd_model *m, const cd_target_desc *t, cd_error *err);
+int cd_spin_steps(const cd_model *m, double duration, double *rate, double *steps);
+typedef struct {
+    const char *name;
+    int fixed;
+    double mass;
+    double inertia[9];
+    double pos[3], quat[4], vel[3], angvel[3];
+    const cd_shape_desc *shapes;
+    int nshape;
+    const cd_link_desc *arm;
+    const cd_joint_props *arm_joint;
+    int narm;
+    int wheels;
+    double wheel_kp, wheel_kd, wheel_torque;
+    ...;
+} cd_chaser_desc;
+cd_chaser_desc cd_chaser_desc_default(void);
+int cd_build_chaser(cd_model *m, const cd_chaser_desc *c, cd_error *err);
+typedef enum { CD_HAND_SOFT, CD_HAND_TAKO, CD_HAND_SPACE, CD_HAND_TORQUE_SWITCH, CD_HAND_NTYPES, ... } cd_hand_type;
+typedef enum { CD_HAND_TWO_OPPOSED, CD_HAND_THREE_120, CD_HAND_TWO_PAIRS, CD_HAND_TWO_INTERLEAVED,
+               CD_HAND_NLAYOUTS, ... } cd_hand_layout;
+typedef struct {
+    const char *name;
+    cd_hand_type type;
+    cd_hand_layout layout;
+    int attach_body;
+    double palm_size[3];
+    double palm_mass;
+    double palm_pos[3];
+    double palm_rot[9];
+    int nlink;
+    double link_length[...];
+    double link_mass[...];
+    double radius, spacing, checkpoint_spacing, pair_offset, joint_spring, joint_damping;
+    int joint_limited;
+    double joint_lower[...];
+    double joint_upper[...];
+    double q0[...];
+    double torque, close_time, close_angle, close_start;
+    int close_on_trigger;
+    double open_at;
+    double ratio[...];
+    double stall_torque, noload_speed, clutch_threshold, wire_stiffness, wire_damping, torque_limit;
+    ...;
+} cd_hand_desc;
+cd_hand_desc cd_hand_desc_default(void);
+typedef struct {
+    int sys, palm, palm_shape, nfinger, nlink;
+    int finger_body[4][16];
+    int ncp, nact;
+    int act[...];
+    double act_close_u[...];
+    int nclutch;
+    int clutch[...];
+    int law;
+    ...;
+} cd_hand;
+double cd_hand_checkpoint_count(const cd_hand_desc *h);
+int cd_build_hand(cd_model *m, const cd_hand_desc *h, cd_hand *out, cd_error *err);
+cd_status cd_build_hand_drive(cd_model *m, const cd_hand_desc *h, cd_hand *hand, const cd_contact_law *law,
+                              const int *target_sys, int ntarget, cd_error *err);
+"""
+
 SOURCE = r"""
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
@@ -342,8 +439,11 @@ def _locate():
 
 
 _inc, _lib, _ = _locate()
+HAVE_BUILDERS = any(os.path.isfile(os.path.join(i, "capdyn", "build.h")) for i in _inc)
 ffibuilder = FFI()
-ffibuilder.cdef(CDEF)
+ffibuilder.cdef(CDEF + (BUILD_CDEF if HAVE_BUILDERS else ""))
+if HAVE_BUILDERS:
+    SOURCE += "#include <capdyn/build.h>\n"
 ffibuilder.set_source(
     "capdyn._capdyn", SOURCE,
     include_dirs=_inc,

@@ -21,8 +21,8 @@ import numpy as np
 
 from ._capdyn import ffi, lib
 
-__all__ = ["CapdynError", "Model", "Scenario", "Simulation", "Capture", "RunResult", "load", "loads",
-           "version"]
+__all__ = ["CapdynError", "Model", "Scenario", "Simulation", "Capture", "RunResult", "Hand", "load", "loads",
+           "version", "HAVE_BUILDERS"]
 
 
 class CapdynError(Exception):
@@ -482,10 +482,194 @@ class Model(_ModelView):
         _fill(d, dict(fields, name=name), keep, "add_finger")
         return self._call(lib.cd_model_add_finger, d)
 
+    # -- the builders (include/capdyn/build.h; capdyn.HAVE_BUILDERS) -----------
+    def _need_builders(self):
+        if not HAVE_BUILDERS:
+            raise NotImplementedError("this capdyn has no builders (include/capdyn/build.h): hands, targets and "
+                                      "chasers come from scenarios ([gripper], [[target]])")
+
+    def _shape_descs(self, shapes, keep, what):
+        """A list of dicts (cd_shape_desc fields; type a shape name or
+        "handrail"; verts n x 3) -> a cd_shape_desc[] kept alive in keep."""
+        if shapes is None:
+            return ffi.NULL, 0
+        if isinstance(shapes, dict):
+            shapes = [shapes]
+        n = len(shapes)
+        arr = ffi.new("cd_shape_desc[]", max(n, 1))
+        keep.append(arr)
+        for i, sh in enumerate(shapes):
+            if not isinstance(sh, dict):
+                raise TypeError(f"{what}[{i}]: expected a dict of cd_shape_desc fields")
+            arr[i] = lib.cd_shape_desc_default()
+            f = dict(sh)
+            if "type" in f:
+                arr[i].type = _enum(f.pop("type"), dict(_SHAPE, handrail=lib.CD_SHAPE_NTYPES), f"{what}[{i}].type")
+            if f.get("verts") is not None:
+                v = _vec(f.pop("verts"), None, f"{what}[{i}].verts")
+                if v.size == 0 or v.size % 3:
+                    raise ValueError(f"{what}[{i}].verts: expected n x 3 numbers, got {v.size}")
+                pv = ffi.new("double[]", list(v))
+                keep.append(pv)
+                arr[i].verts, arr[i].nvert = pv, v.size // 3
+            _fill(arr[i], f, keep, f"{what}[{i}]")
+        return arr, n
+
+    def build_shape(self, body, type, **fields):
+        """cd_build_shape: a shape, or a handrail (type "handrail": a capsule
+        bar and two box posts) on body; fields of cd_shape_desc (radius,
+        length, size -- full edges --, height, post, pos, rot, verts).
+        Returns the id of the first shape added."""
+        self._need_builders()
+        keep = []
+        arr, _ = self._shape_descs([dict(fields, type=type)], keep, "build_shape")
+        return self._call(lib.cd_build_shape, self._body(body), arr)
+
+    def add_target(self, name=None, shapes=None, **fields):
+        """cd_build_target: a rigid target (a free base unless fixed=1) with
+        its shapes (a list of dicts as build_shape's); fields of
+        cd_target_desc (mass, inertia, pos, quat, vel, angvel, fixed,
+        prescribed). Returns its system id."""
+        self._need_builders()
+        keep = []
+        d = ffi.new("cd_target_desc *", lib.cd_target_desc_default())
+        d.shapes, d.nshape = self._shape_descs(shapes, keep, "add_target shapes")
+        _fill(d, dict(fields, name=name), keep, "add_target")
+        return self._call(lib.cd_build_target, d)
+
+    def add_chaser(self, name=None, shapes=None, arm=None, arm_joint=None, **fields):
+        """cd_build_chaser: a base with its shapes, an arm (a list of dicts of
+        cd_link_desc fields; "parent" an index into the arm, -1 the base;
+        "type" revolute or prismatic) with optional joint properties
+        (arm_joint: a list of dicts of cd_joint_props fields or None), and
+        reaction wheels (wheels=1, wheel_kp, wheel_kd, wheel_torque).
+        Arm link i is body base_body(sys) + 1 + i. Returns its system id."""
+        self._need_builders()
+        keep = []
+        d = ffi.new("cd_chaser_desc *", lib.cd_chaser_desc_default())
+        d.shapes, d.nshape = self._shape_descs(shapes, keep, "add_chaser shapes")
+        arm = list(arm or [])
+        if arm:
+            links = ffi.new("cd_link_desc[]", len(arm))
+            keep.append(links)
+            for i, l in enumerate(arm):
+                if not isinstance(l, dict):
+                    raise TypeError(f"add_chaser arm[{i}]: expected a dict of cd_link_desc fields")
+                links[i] = lib.cd_link_desc_default()
+                f = dict(l)
+                links[i].parent = _int(f.pop("parent", i - 1), f"add_chaser arm[{i}].parent", -1, i)
+                if "type" in f:
+                    links[i].type = _enum(f.pop("type"), _JOINT, f"add_chaser arm[{i}].type")
+                _fill(links[i], f, keep, f"add_chaser arm[{i}]")
+            d.arm, d.narm = links, len(arm)
+            if arm_joint is not None:
+                if len(arm_joint) != len(arm):
+                    raise ValueError(f"add_chaser arm_joint: expected {len(arm)} entries, got {len(arm_joint)}")
+                jp = ffi.new("cd_joint_props[]", len(arm))
+                keep.append(jp)
+                for i, j in enumerate(arm_joint):
+                    jp[i] = lib.cd_joint_props_default()
+                    if j is not None:
+                        _fill(jp[i], j, keep, f"add_chaser arm_joint[{i}]")
+                d.arm_joint = jp
+        elif arm_joint is not None:
+            raise ValueError("add_chaser: arm_joint without an arm")
+        _fill(d, dict(fields, name=name), keep, "add_chaser")
+        return self._call(lib.cd_build_chaser, d)
+
+    def add_hand(self, type="space", layout="two_opposed", name=None, **fields):
+        """cd_build_hand (stage 1): the palm and the fingers; type "soft",
+        "tako", "space", "torque_switch"; layout "two_opposed", "three_120",
+        "two_pairs", "two_interleaved"; fields of cd_hand_desc (attach_body,
+        palm_size, palm_pos, nlink, link_length, link_mass, radius, spacing,
+        joint_limited, joint_lower, joint_upper, q0, torque, close_time,
+        close_angle, close_start, clutch_threshold, ...: arrays of
+        CD_HAND_MAX_LINKS entries may be given shorter, the rest 0). Returns a
+        Hand; then add_hand_drive(hand, ...) once the targets exist."""
+        self._need_builders()
+        keep = []
+        d = ffi.new("cd_hand_desc *", lib.cd_hand_desc_default())
+        d.type = _enum(type, {"soft": lib.CD_HAND_SOFT, "tako": lib.CD_HAND_TAKO, "space": lib.CD_HAND_SPACE,
+                              "torque_switch": lib.CD_HAND_TORQUE_SWITCH}, "add_hand type")
+        d.layout = _enum(layout, {"two_opposed": lib.CD_HAND_TWO_OPPOSED, "three_120": lib.CD_HAND_THREE_120,
+                                  "two_pairs": lib.CD_HAND_TWO_PAIRS,
+                                  "two_interleaved": lib.CD_HAND_TWO_INTERLEAVED}, "add_hand layout")
+        f = dict(fields, name=name)
+        if f.get("attach_body") is not None and f["attach_body"] != -1:
+            f["attach_body"] = self._body(f["attach_body"], "attach_body")
+        for k in ("link_length", "link_mass", "joint_lower", "joint_upper", "q0", "ratio"):
+            if f.get(k) is not None:  # per-link arrays: the given links, the rest as the default
+                cur = getattr(d, k)
+                v = _vec(f.pop(k), None, f"add_hand.{k}")
+                if v.size > len(cur):
+                    raise ValueError(f"add_hand.{k}: at most {len(cur)} links, got {v.size}")
+                for i in range(v.size):
+                    cur[i] = v[i]
+        _fill(d, f, keep, "add_hand")
+        out = ffi.new("cd_hand *")
+        self._call(lib.cd_build_hand, d, out)
+        return Hand(d, out, keep)
+
+    def add_hand_drive(self, hand, law=None, targets=()):
+        """cd_build_hand_drive (stage 2): the hand's motors or clutched
+        fingers and its contact pairs with law (a dict of cd_contact_law
+        fields, default cd_contact_law_default(); or ("rule", k_soft,
+        k_ratio, m_eff, zeta, mu) for cd_contact_law_from_rule) against
+        every shape of the target systems."""
+        self._need_builders()
+        if not isinstance(hand, Hand):
+            raise TypeError(f"add_hand_drive: expected the Hand of add_hand, got {type(hand).__name__}")
+        if isinstance(law, tuple) and law and law[0] == "rule":
+            if len(law) != 6:
+                raise ValueError("add_hand_drive law: ('rule', k_soft, k_ratio, m_eff, zeta, mu)")
+            c = ffi.new("cd_contact_law *", lib.cd_contact_law_from_rule(
+                *(_real(x, "add_hand_drive law") for x in law[1:])))
+        else:
+            c = ffi.new("cd_contact_law *", lib.cd_contact_law_default())
+            if law is not None:
+                if not isinstance(law, dict):
+                    raise TypeError("add_hand_drive law: a dict of cd_contact_law fields or ('rule', ...)")
+                _fill(c, law, [], "add_hand_drive law")
+        ts = [self._sys(t, "add_hand_drive targets") for t in ([targets] if isinstance(targets, (int, str)) else targets)]
+        tp = ffi.new("int[]", ts or [0])
+        self._call_st(lib.cd_build_hand_drive, hand._desc, hand._c, c, tp, len(ts))
+        return hand
+
     def finalize(self):
         """Validates and freezes the model (cd_model_finalize)."""
         self._call_st(lib.cd_model_finalize)
         return self
+
+
+HAVE_BUILDERS = hasattr(lib, "cd_build_hand")
+
+
+class Hand:
+    """What add_hand / add_hand_drive made (cd_hand): sys, palm, palm_shape,
+    nfinger, nlink, finger_body[f][j] (link bodies, base to tip), ncp; after
+    the drive: act (motor indices into ctrl), act_close_u, clutch (clutched
+    finger ids), law."""
+
+    def __init__(self, desc, c, keep):
+        self._desc, self._c, self._keep = desc, c, keep
+
+    def __getattr__(self, k):
+        c = self.__dict__["_c"]
+        if k == "finger_body":
+            return [[c.finger_body[f][j] for j in range(c.nlink)] for f in range(c.nfinger)]
+        if k == "act":
+            return [c.act[i] for i in range(c.nact)]
+        if k == "act_close_u":
+            return [c.act_close_u[i] for i in range(c.nact)]
+        if k == "clutch":
+            return [c.clutch[i] for i in range(c.nclutch)]
+        if k in ("sys", "palm", "palm_shape", "nfinger", "nlink", "ncp", "nact", "nclutch", "law"):
+            return getattr(c, k)
+        raise AttributeError(k)
+
+    def __repr__(self):
+        return (f"Hand(sys={self.sys}, palm={self.palm}, fingers={self.finger_body}, ncp={self.ncp}, "
+                f"act={self.act}, clutch={self.clutch})")
 
 
 # ---- scenarios ---------------------------------------------------------------
@@ -837,6 +1021,10 @@ class Simulation:
     body_x = property(lambda s: s._view("body_x", 3 * s._m.nbody, (s._m.nbody, 3)))
     body_c = property(lambda s: s._view("body_c", 3 * s._m.nbody, (s._m.nbody, 3)))
     body_R = property(lambda s: s._view("body_R", 9 * s._m.nbody, (s._m.nbody, 3, 3)))
+    body_v = property(lambda s: s._view("body_v", 3 * s._m.nbody, (s._m.nbody, 3)), doc="CoM velocities [m/s]")
+    body_w = property(lambda s: s._view("body_w", 3 * s._m.nbody, (s._m.nbody, 3)), doc="angular velocities")
+    finger_mode = property(lambda s: s._view("finger_mode", s._m.nfinger, dtype=np.dtype(f"i{ffi.sizeof('int')}")),
+                           doc="clutched fingers: 0 engaged, 1 released (the clutch disengaged)")
     slot_fn = property(lambda s: s._view("slot_fn", s._m.nslot), doc="normal force per slot [N]")
     slot_ft = property(lambda s: s._view("slot_ft", 3 * s._m.nslot, (s._m.nslot, 3)))
     slot_x = property(lambda s: s._view("slot_x", s._m.nslot))
