@@ -1091,13 +1091,14 @@ class Simulation:
         err = _err()
         self._status(lib.cd_data_reset(self._m, self._live(), err), err)
         if self._ctl is not None:
-            lib.cd_ctrl_free(self._ctl)
-            self._ctl = None
+            # a new controller (fresh memory) installed before the old one is freed:
+            # the data never points at a freed controller
             c = lib.cd_ctrl_create(self._m, self._sc.control, err)
             if c == ffi.NULL:
                 _raise(err.status, err)
-            self._ctl = c
             lib.cd_ctrl_install(c, self._dp)
+            old, self._ctl = self._ctl, c
+            lib.cd_ctrl_free(old)
         if self._mon is not None:
             self._init_monitor(self._mon.opt)
 
