@@ -285,3 +285,35 @@ def test_every_method_with_every_bad_value():
     sim.reset()
     sim.advance(0.01)
     assert sim.t == 0.01
+
+
+def test_garbage_through_the_views():
+    """Huge, infinite, NaN values written into the state and the inputs
+    through the writable views: each later call returns or raises
+    CapdynError (the engine checks what it integrates), never crashes; the
+    state restored, the simulation runs on."""
+    rng = np.random.default_rng(1)
+    sim = capdyn.Simulation(capdyn.load(scenario("paper_fig5_envelope_grasp.toml")))
+    sim.options.max_steps = 2000
+    base = sim.state_get()
+    outcomes = {"ok": 0, "error": 0}
+    for trial in range(40):
+        sim.state_set(base)
+        k = trial % 4
+        if k == 0:
+            sim.y[:] = rng.normal(0, 1, sim.y.size) * 10.0 ** float(rng.integers(-3, 300))
+        elif k == 1:
+            sim.y[rng.integers(0, sim.y.size)] = rng.choice([0.0, 1e308, -1e308, np.nan, np.inf])
+        elif k == 2:
+            sim.qfrc_applied[:] = rng.choice([1e308, -1e308, np.nan, 0.0], sim.qfrc_applied.size)
+        else:
+            sim.xfrc_applied[:] = rng.normal(0, 1, sim.xfrc_applied.shape) * 1e200
+        try:
+            sim.advance(sim.t + 0.01)
+            outcomes["ok"] += 1
+        except CapdynError:
+            outcomes["error"] += 1
+    assert outcomes["error"] > 0 and sum(outcomes.values()) == 40
+    sim.state_set(base)
+    sim.advance(0.01)
+    assert sim.t == 0.01
