@@ -4,7 +4,6 @@ built through capdyn.Model gives the same model (every state entry and size)
 as the C calls, and the same outcome: after 4 s both fingers are clutched
 and the cylinder is held (speed below 1e-3 m/s, centred within half the
 finger spacing)."""
-import math
 
 import numpy as np
 import pytest

@@ -9,12 +9,10 @@ The scenario is the Space Gripper on a handrail (paper Fig. 11), cut at
 --set override goes to both sides."""
 import math
 import multiprocessing
-import os
 import subprocess
 
 import h5py
 import numpy as np
-import pytest
 
 import capdyn
 from conftest import BIN, scenario

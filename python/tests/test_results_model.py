@@ -1,8 +1,6 @@
 """The results reader against `capdyn export` (same column names, same
 numbers to export's 10 significant digits), scenarios from TOML strings,
 and a model built from Python checked against a closed-form answer."""
-import math
-import os
 
 import numpy as np
 import pytest
