@@ -44,13 +44,13 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli examples test asan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli shared examples test python-test asan bench demo figures capture-map clean help check-deps install uninstall install-check
 
-all: check-deps $(LIB) $(CLI)
+all: check-deps $(LIB) $(CLI) shared
 
 help:
 	@echo "make deps     install Debian packages (scripts/install-deps.sh)"
-	@echo "make          build $(LIB) and $(CLI)"
+	@echo "make          build $(LIB), $(LIB_IO), their shared libraries (.so) and $(CLI)"
 	@echo "make test     install deps, build, run every test (Criterion), then every example"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
@@ -60,7 +60,8 @@ help:
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
 	@echo "make capture-map  the capture-success map (aim error x tumbling rate, ~25 runs; docs/capture.md)"
-	@echo "make install PREFIX=/usr/local   static libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
+	@echo "make install PREFIX=/usr/local   static and shared libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
+	@echo "make python-test  the Python package (python/) in $(BUILD)/venv, its pytest suite (docs/python.md)"
 	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
 deps:
@@ -133,6 +134,7 @@ test: deps
 	CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
+	@$(MAKE) --no-print-directory python-test
 	@$(MAKE) --no-print-directory install-check
 
 asan: deps
@@ -162,9 +164,64 @@ PC_FILES = capdyn.pc capdyn-io.pc
 # against the installed copy only (add examples here as they come)
 INSTALL_CHECK_SRC ?= tests/embed/embed_core.c tests/embed/embed_io.c $(EXAMPLE_SRC)
 
-install: check-deps $(LIB) $(LIB_IO) $(CLI)
+# ---- shared libraries (issue 19; docs/python.md "Shared libraries") ----
+# The library objects are position-independent (-fPIC), so the same objects
+# make the static archives (which can then go into a shared object too) and
+# libcapdyn.so / libcapdyn_io.so. -fno-semantic-interposition keeps calls
+# inside the library direct (no PLT, inlining as without -fPIC). Only the
+# public API is exported: the cd_* functions declared in include/capdyn/*.h,
+# listed at build time by scripts/public-symbols.sh into a linker version
+# script (local: * hides every other symbol, internal cd_* ones and toml++'s
+# C++ included); tests/install_check.sh compares `nm -D` with that list.
+# soname: libcapdyn.so.MAJOR.MINOR while the major version is 0 (the ABI
+# may change with every minor version), real name libcapdyn.so.VERSION.
+PIC_FLAGS = -fPIC -fno-semantic-interposition
+$(CORE_OBJ) $(IO_OBJ): CFLAGS_ALL += $(PIC_FLAGS)
+$(CORE_OBJ) $(IO_OBJ): CXXFLAGS_ALL += $(PIC_FLAGS)
+SOVERSION = $(word 1,$(subst ., ,$(VERSION))).$(word 2,$(subst ., ,$(VERSION)))
+SO_MAP   = $(BUILD)/capdyn.map
+SO       = $(BUILD)/libcapdyn.so
+SO_IO    = $(BUILD)/libcapdyn_io.so
+SO_REAL    = $(SO).$(VERSION)
+SO_IO_REAL = $(SO_IO).$(VERSION)
+SO_LDFLAGS = -shared -Wl,--no-undefined -Wl,--version-script=$(SO_MAP) $(EXTRA_LDFLAGS)
+
+$(SO_MAP): $(PUB_HEADERS) scripts/public-symbols.sh
+	@mkdir -p $(dir $@)
+	CC="$(CC)" bash scripts/public-symbols.sh --version-script $(PUB_HEADERS) > $@.tmp && mv $@.tmp $@
+
+$(SO_REAL): $(CORE_OBJ) $(SO_MAP)
+	$(CC) $(OPT) $(SO_LDFLAGS) -Wl,-soname,$(notdir $(SO)).$(SOVERSION) -o $@ $(CORE_OBJ) $(LIBS_CORE)
+
+$(SO_IO_REAL): $(IO_OBJ) $(SO_REAL) $(SO_MAP)
+	$(CXX) $(OPT) $(SO_LDFLAGS) -Wl,-soname,$(notdir $(SO_IO)).$(SOVERSION) -o $@ $(IO_OBJ) $(SO_REAL) $(LIBS_IO) $(LIBS_CORE)
+
+# the development and soname links next to each real file
+$(SO) $(SO_IO): %.so: %.so.$(VERSION)
+	ln -sf $(notdir $<) $*.so.$(SOVERSION)
+	ln -sf $(notdir $*).so.$(SOVERSION) $@
+
+shared: $(SO) $(SO_IO)
+
+# The Python package (python/, docs/python.md): a virtual environment with
+# the pinned PyPI packages of python/requirements.txt and the package built
+# against these headers and shared libraries (scripts/install-python-deps.sh,
+# Debian's python3-venv/python3-dev only when missing), then its pytest suite
+# (pytest prints its closing line). PYTEST_ARGS adds pytest options.
+VENV ?= $(BUILD)/venv
+python-test: deps
+	@$(MAKE) --no-print-directory $(CLI) $(SO) $(SO_IO)
+	@BUILD=$(BUILD) VENV=$(VENV) bash scripts/install-python-deps.sh
+	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) CAPDYN_BUILD=$(abspath $(BUILD)) CC="$(CC)" \
+	  $(VENV)/bin/pytest -p no:cacheprovider python/tests $(PYTEST_ARGS)
+
+install: check-deps $(LIB) $(LIB_IO) $(CLI) $(SO) $(SO_IO)
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/capdyn $(DESTDIR)$(PCDIR) $(DESTDIR)$(BINDIR)
 	install -m 644 $(LIB) $(LIB_IO) $(DESTDIR)$(LIBDIR)/
+	install -m 755 $(SO_REAL) $(SO_IO_REAL) $(DESTDIR)$(LIBDIR)/
+	for so in $(notdir $(SO) $(SO_IO)); do \
+	  ln -sf $$so.$(VERSION) $(DESTDIR)$(LIBDIR)/$$so.$(SOVERSION) && ln -sf $$so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/$$so || exit 1; \
+	done
 	install -m 644 $(PUB_HEADERS) $(DESTDIR)$(INCDIR)/capdyn/
 	install -m 755 $(CLI) $(DESTDIR)$(BINDIR)/
 	for pc in $(PC_FILES); do \
@@ -174,11 +231,12 @@ install: check-deps $(LIB) $(LIB_IO) $(CLI)
 
 uninstall:
 	rm -f $(DESTDIR)$(LIBDIR)/$(notdir $(LIB)) $(DESTDIR)$(LIBDIR)/$(notdir $(LIB_IO))
+	for so in $(notdir $(SO) $(SO_IO)); do rm -f $(DESTDIR)$(LIBDIR)/$$so $(DESTDIR)$(LIBDIR)/$$so.$(SOVERSION) $(DESTDIR)$(LIBDIR)/$$so.$(VERSION); done
 	rm -f $(addprefix $(DESTDIR)$(INCDIR)/capdyn/,$(notdir $(PUB_HEADERS)))
 	rm -f $(addprefix $(DESTDIR)$(PCDIR)/,$(PC_FILES)) $(DESTDIR)$(BINDIR)/$(notdir $(CLI))
 	-rmdir $(DESTDIR)$(INCDIR)/capdyn 2>/dev/null
 
-install-check: $(LIB) $(LIB_IO) $(CLI)
+install-check: $(LIB) $(LIB_IO) $(CLI) $(SO) $(SO_IO)
 	@BUILD=$(BUILD) MAKE="$(MAKE)" bash tests/install_check.sh $(INSTALL_CHECK_SRC)
 
 demo: deps
