@@ -221,6 +221,7 @@ typedef struct cd_data {
     void *integ;          /* private integrator state (GSL objects, buffers) */
     cd_allocator allocator; /* the one that made this data's block */
     void *block;          /* that block */
+    double *state_undo;   /* private: cd_state_set keeps the previous state here while it checks the new one */
 } cd_data;
 
 /* Allocates data for a finalized model and sets the initial state from the

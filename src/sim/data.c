@@ -73,6 +73,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(finger_theta, m->nfinger); CARVE(finger_t0, m->nfinger);
     CARVE(sw_tswitch, m->nsw); CARVE(sw_nswitch, m->nsw); CARVE(sw_held, m->nsw);
     CARVE(act_piece, m->nu);
+    CARVE(state_undo, cd_state_body_size(m));
     CARVE(ev, d ? d->ev_cap : 0);
 #undef CARVE
     off = (off + 15) & ~(size_t)15;

@@ -795,6 +795,37 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
 
+/* cd_state_set's check of the integrator's part, before anything changes:
+ * 0, or -1 with why naming the first bad word. */
+int cd_integ_state_check(const cd_model *m, const double *b, char *why, size_t len)
+{
+    static const char *const fixed[INTEG_FIXED_WORDS] = {"step size h", "end time", "cd_step origin",
+                                                       "cd_step step", "cd_step step count", "end flag",
+                                                       "FSAL flag", "restart flag", "rtol", "atol"};
+    int i, n = cd_integ_state_size(m);
+    for (i = 0; i < INTEG_FIXED_WORDS; i++) {
+        double v = b[i];
+        int ok = isfinite(v);
+        if (ok && (i == 0 || i == 3 || i >= 8)) ok = v >= 0; /* h, step, tolerances */
+        if (ok && i == 4) ok = v >= 0 && v <= 9007199254740992.0 && v == floor(v);
+        if (ok && i >= 5 && i <= 7) ok = v == 0 || v == 1;
+        if (!ok) {
+            snprintf(why, len, "the integrator's %s is %.17g (%s)", fixed[i], v,
+                     i == 4 ? "expected a whole number >= 0" : i >= 5 && i <= 7 ? "expected 0 or 1"
+                     : i == 1 || i == 2 ? "expected a finite number" : "expected a finite number >= 0");
+            return -1;
+        }
+    }
+    for (i = INTEG_FIXED_WORDS; i < n; i++)
+        if (!isfinite(b[i])) {
+            snprintf(why, len, "the integrator's %s value %d is %.17g (expected a finite number)",
+                     i < INTEG_FIXED_WORDS + m->ny ? "saved end state" : "saved input", i - INTEG_FIXED_WORDS -
+                     (i < INTEG_FIXED_WORDS + m->ny ? 0 : m->ny), b[i]);
+            return -1;
+        }
+    return 0;
+}
+
 void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
 {
     cd_integ *I = (cd_integ *)d->integ;
