@@ -92,6 +92,7 @@ static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw
 int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
                       double *dist, double n[3], double s[3])
 {
+    if (!m || !p || !dist || !n || !s) return -1;
     int type = m->shape_type[shape], fa = m->shape_face_adr[shape];
     (void)radius;
     if (type == CD_SHAPE_CONVEX)
@@ -103,6 +104,7 @@ int cd_shape_distance(const cd_model *m, int shape, const double p[3], double ra
 int cd_shape_distance_ccd(const cd_model *m, int shape, const double p[3], double radius,
                           double *dist, double n[3], double s[3])
 {
+    if (!m || !p || !dist || !n || !s) return -1;
     if (m->shape_type[shape] == CD_SHAPE_PLANE) return -1;
     return cd_geom_ccd(m->shape_type[shape], m->shape_size + 3 * shape,
                        m->vert + 3 * m->shape_vert_adr[shape], m->shape_vert_num[shape], p, radius, 1,

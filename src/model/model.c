@@ -84,6 +84,10 @@ cd_options cd_options_default(void)
 
 cd_status cd_options_check(const cd_options *o, cd_error *err)
 {
+    if (!o) {
+        cd_error_set(err, CD_EINVAL, "cd_options_check: %s is NULL", "the options");
+        return CD_EINVAL;
+    }
     if (!o) { seterr(err, CD_EINVAL, "options are NULL"); return CD_EINVAL; }
     if (o->stepper < 0 || o->stepper >= CD_STEP_NTYPES) { seterr(err, CD_EINVAL, "unknown stepper %d", (int)o->stepper); return CD_EINVAL; }
     if (!(isfinite(o->rtol) && isfinite(o->atol) && o->rtol >= 0 && o->atol >= 0 && o->rtol + o->atol > 0)) {
@@ -735,6 +739,10 @@ int cd_model_add_actuator(cd_model *m, const cd_actuator_desc *a, cd_error *err)
 
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err)
 {
+    if (!m || !a) {
+        cd_error_set(err, CD_EINVAL, "cd_model_set_actuator: %s is NULL", !m ? "the model" : "the actuator");
+        return CD_EINVAL;
+    }
     cd_actuator_desc d = cd_actuator_desc_default();
     double one = 1.0;
     char what[160];
@@ -832,6 +840,10 @@ int cd_model_add_finger(cd_model *m, const cd_finger_desc *f, cd_error *err)
 
 cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_error *err)
 {
+    if (!m || !p) {
+        cd_error_set(err, CD_EINVAL, "cd_model_set_joint: %s is NULL", !m ? "the model" : "the joint properties");
+        return CD_EINVAL;
+    }
     const char *nm;
     int bad;
     FROZEN_CHECK(CD_EINVAL);
@@ -897,6 +909,10 @@ cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_err
 
 cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const double w[3], cd_error *err)
 {
+    if (!m || !v || !w) {
+        cd_error_set(err, CD_EINVAL, "cd_model_prescribe_base: %s is NULL", !m ? "the model" : !v ? "v" : "w");
+        return CD_EINVAL;
+    }
     int b;
     FROZEN_CHECK(CD_EINVAL);
     if (sys < 0 || sys >= m->nsys || m->sys_base_type[sys] != CD_BASE_FREE) {
@@ -919,6 +935,10 @@ cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const
 
 cd_status cd_model_set_user_switches(cd_model *m, int n, cd_error *err)
 {
+    if (!m) {
+        cd_error_set(err, CD_EINVAL, "cd_model_set_user_switches: %s is NULL", "the model");
+        return CD_EINVAL;
+    }
     FROZEN_CHECK(CD_EINVAL);
     if (n < 0 || n > 1000000) { seterr(err, CD_EINVAL, "user switches: count %d out of range [0, 1e6]", n); return CD_EINVAL; }
     m->nuser = n;
@@ -1268,6 +1288,10 @@ out:
 
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
+    if (!m) {
+        cd_error_set(err, CD_EINVAL, "cd_model_finalize: %s is NULL", "the model");
+        return CD_EINVAL;
+    }
     int s, b, i, k, nslot = 0, ny = 0, nv = 0;
     if (!m) { seterr(err, CD_EINVAL, "model is NULL"); return CD_EINVAL; }
     if (m->finalized) return CD_OK;

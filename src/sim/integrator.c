@@ -735,6 +735,10 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
 cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
                          cd_error *err)
 {
+    if (!m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_sim_advance: %s is NULL", !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     cd_integ *I = (cd_integ *)d->integ;
     int started;
     cd_status st = advance(m, d, t_end, cb, user, err, &started);
@@ -746,6 +750,10 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
 
 cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 {
+    if (!m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_step: %s is NULL", !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     cd_integ *I = (cd_integ *)d->integ;
     double t_target, hsave = I->h;
     int started;

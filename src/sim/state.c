@@ -54,6 +54,7 @@ size_t cd_state_body_size(const cd_model *m)
 
 size_t cd_state_size(const cd_model *m)
 {
+    if (!m) return 0;
     return HEADER + cd_state_body_size(m) + (size_t)cd_integ_state_size(m);
 }
 
@@ -235,9 +236,15 @@ void cd_state_copy_eval(const cd_model *m, cd_data *dst, const cd_data *src)
 cd_status cd_state_copy(const cd_model *m, cd_data *dst, cd_data *src, cd_error *err)
 {
     /* one temporary buffer from dst's allocator (documented: this call allocates) */
-    size_t n = cd_state_size(m);
-    double *tmp = dst->allocator.alloc(n * sizeof(double), dst->allocator.ctx);
+    size_t n;
+    double *tmp;
     cd_status st;
+    if (!m || !dst || !src) {
+        cd_error_set(err, CD_EINVAL, "cd_state_copy: %s is NULL", !m ? "the model" : !dst ? "dst" : "src");
+        return CD_EINVAL;
+    }
+    n = cd_state_size(m);
+    tmp = dst->allocator.alloc(n * sizeof(double), dst->allocator.ctx);
     if (!tmp) { cd_error_set(err, CD_ENOMEM, "cd_state_copy: out of memory"); return CD_ENOMEM; }
     cd_state_get(m, src, tmp);
     st = cd_state_set(m, dst, tmp, err);
