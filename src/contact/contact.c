@@ -136,7 +136,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
         int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
         const cd_contact_law *L = &m->law[m->slot_law[k]];
-        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3], c[3], va[3], vb[3], vrel[3], vt[3];
+        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3] = {0, 0, 0}, c[3], va[3], vb[3], vrel[3], vt[3];
         double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
         double *z = d->y + m->ny_slot_adr + 3 * k;
         cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
