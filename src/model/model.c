@@ -739,8 +739,8 @@ int cd_model_add_actuator(cd_model *m, const cd_actuator_desc *a, cd_error *err)
 
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err)
 {
-    if (!m || !a) {
-        cd_error_set(err, CD_EINVAL, "cd_model_set_actuator: %s is NULL", !m ? "the model" : "the actuator");
+    if (!m) { /* (a NULL actuator is refused below, naming the joint) */
+        cd_error_set(err, CD_EINVAL, "cd_model_set_actuator: %s is NULL", "the model");
         return CD_EINVAL;
     }
     cd_actuator_desc d = cd_actuator_desc_default();
