@@ -554,6 +554,48 @@ static void seterr(cd_error *err, cd_status st, const char *msg, double t)
     snprintf(err->msg, sizeof err->msg, "%s at t = %.9g s", msg, t);
 }
 
+/* A numeric failure names its cause when it is a non-finite input (issue 24:
+ * a NaN in d->ctrl was reported as "non-finite state or singular mass
+ * matrix"): the first non-finite ctrl, qfrc_applied, xfrc_applied or
+ * xfrc_body element, with the actuator or body it belongs to. */
+static int nonfinite_input(const cd_model *m, const cd_data *d, char *buf, size_t len)
+{
+    int i;
+    const char *nm;
+    for (i = 0; i < m->nu; i++)
+        if (!isfinite(d->ctrl[i])) {
+            nm = m->act_name && m->act_name[i] && m->act_name[i][0] ? m->act_name[i] : NULL;
+            snprintf(buf, len, "d->ctrl[%d] (actuator %s%s%s) is %s", i, nm ? "'" : "", nm ? nm : "unnamed",
+                     nm ? "'" : "", isnan(d->ctrl[i]) ? "NaN" : "infinite");
+            return 1;
+        }
+    for (i = 0; i < m->nv; i++)
+        if (!isfinite(d->qfrc_applied[i])) {
+            snprintf(buf, len, "d->qfrc_applied[%d] is %s", i, isnan(d->qfrc_applied[i]) ? "NaN" : "infinite");
+            return 1;
+        }
+    for (i = 0; i < 6 * m->nbody; i++) {
+        const double *w = !isfinite(d->xfrc_applied[i]) ? d->xfrc_applied : !isfinite(d->xfrc_body[i]) ? d->xfrc_body : NULL;
+        if (!w) continue;
+        nm = m->body_name[i / 6] && m->body_name[i / 6][0] ? m->body_name[i / 6] : NULL;
+        snprintf(buf, len, "d->%s[%d] (body %d%s%s%s) is %s", w == d->xfrc_applied ? "xfrc_applied" : "xfrc_body", i,
+                 i / 6, nm ? " '" : ", unnamed", nm ? nm : "", nm ? "'" : "", isnan(w[i]) ? "NaN" : "infinite");
+        return 1;
+    }
+    return 0;
+}
+
+static void numeric_err(const cd_model *m, const cd_data *d, cd_error *err, cd_status st, const char *msg, double t)
+{
+    char in[300], both[400];
+    if (nonfinite_input(m, d, in, sizeof in)) {
+        snprintf(both, sizeof both, "non-finite input: %s", in);
+        seterr(err, st, both, t);
+    } else {
+        seterr(err, st, msg, t);
+    }
+}
+
 /* Start of a call: runtime options, and what the caller changed since the
  * last one. Returns 1 if the modes must be re-checked before stepping. */
 static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st, cd_error *err)
@@ -619,7 +661,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
          * ordinary step the end-of-step evaluation has already shown them consistent */
         if (need_settle) {
             st = settle_modes(m, d, I, &changed);
-            if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
+            if (st != CD_OK) { numeric_err(m, d, err, st, "non-finite state or singular mass matrix", d->t); return st; }
             need_settle = 0;
             if (changed) {
                 restart(d, I);
@@ -656,7 +698,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         if (status != GSL_SUCCESS) {
             restore_start(m, d, I, t0, d->y);
             if (status == GSL_EBADFUNC) {
-                seterr(err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
+                numeric_err(m, d, err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
                 return CD_ENUMERIC;
             }
             seterr(err, CD_ESTALL, "integrator step failed", t0);
@@ -672,7 +714,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         d->stats.nrhs++;
         if (st != CD_OK) {
             restore_start(m, d, I, t0, d->y);
-            seterr(err, CD_ENUMERIC, "non-finite state after a step", t0);
+            numeric_err(m, d, err, CD_ENUMERIC, "non-finite state after a step", t0);
             return CD_ENUMERIC;
         }
         I->fsal = 1;
