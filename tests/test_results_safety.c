@@ -559,6 +559,67 @@ Test(results_safety, a_loaded_machine_never_gets_an_unreadable_file, .timeout = 
     rm_rf(dir);
 }
 
+Test(results_safety, info_refuses_a_file_whose_series_do_not_read, .timeout = 60)
+{
+    /* The file issue 28 found: committed_samples 0 and a chunk index that
+     * does not read. Made from a whole run of the free-floating arm: its
+     * committed_samples set to 0, and the signature of its first chunk-index
+     * node that holds chunks ("TREE", node type 1, entries used > 0) broken. capdyn info read no committed row
+     * and said "unfinished" with exit 0; now it reads every dataset in full
+     * and exits 1 with one line naming the dataset. */
+    char dir[64], sc[512], h5[600], *err = NULL, *out = NULL;
+    char *sets[] = {(char *)"--set", (char *)"simulation.duration=0.02", NULL};
+    hid_t f, a;
+    long long zero = 0;
+    FILE *fp;
+    unsigned char *bytes;
+    long size, i, at = -1;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "free_floating_arm.toml");
+    cr_assert_eq(run_traced(dir, sc, sets, "x.h5", NULL), 0);
+    snprintf(h5, sizeof h5, "%s/x.h5", dir);
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "the whole file reads: %s", err);
+    free(out);
+    free(err);
+    {
+        hid_t fapl = H5Pcreate(H5P_FILE_ACCESS);
+        H5Pset_file_locking(fapl, 0, 1);
+        f = H5Fopen(h5, H5F_ACC_RDWR, fapl);
+        H5Pclose(fapl);
+    }
+    cr_assert_geq(f, 0);
+    a = H5Aopen(f, "committed_samples", H5P_DEFAULT);
+    cr_assert_geq(a, 0);
+    cr_assert_geq(H5Awrite(a, H5T_NATIVE_LLONG, &zero), 0);
+    H5Aclose(a);
+    H5Fclose(f);
+    fp = fopen(h5, "r+b");
+    cr_assert_not_null(fp);
+    fseek(fp, 0, SEEK_END);
+    size = ftell(fp);
+    bytes = malloc((size_t)size);
+    fseek(fp, 0, SEEK_SET);
+    cr_assert_eq(fread(bytes, 1, (size_t)size, fp), (size_t)size);
+    for (i = 0; i + 5 <= size && at < 0; i++)
+        if (i + 8 <= size && !memcmp(bytes + i, "TREE\001", 5) && (bytes[i + 6] | bytes[i + 7]) != 0) at = i;
+    cr_assert_geq(at, 0, "a chunk index node with entries in the file");
+    fseek(fp, at, SEEK_SET);
+    fputc('X', fp);
+    fclose(fp);
+    free(bytes);
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d; stdout: %.200s", rc, out ? out : "");
+    cr_expect(err && strstr(err, "a damaged results file: dataset /") && strstr(err, "does not read") &&
+                  strstr(err, "0 samples committed"), "the message: %s", err);
+    cr_expect(err && strchr(err, '\n') == err + strlen(err) - 1, "one line: %s", err);
+    cr_expect(out && out[0] == 0, "nothing on stdout: %s", out);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}
+
 /* ---- untrusted files: single-bit flips ------------------------------------------ */
 /* Runs capdyn with args; returns the exit status (128 + signal if killed);
  * *out, *err its output. ASan (make asan) must not turn a crash inside the
