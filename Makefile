@@ -16,7 +16,10 @@ ifeq ($(MPI),1)
 PKGS_IO  += ompi-c
 EXTRA_CFLAGS += -DCAPDYN_MPI
 endif
-WARN    = -Wall -Wextra -Wpedantic -Werror
+# WERROR=0 turns -Werror off (a sanitizer build may meet a compiler's false
+# warning, e.g. -Wmaybe-uninitialized under -fsanitize=thread); on by default
+WERROR  ?= 1
+WARN    = -Wall -Wextra -Wpedantic $(if $(filter 1,$(WERROR)),-Werror)
 OPT     ?= -O2 -g
 CFLAGS_ALL   = -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
 CXXFLAGS_ALL = -std=c++17 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
@@ -44,7 +47,7 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli shared examples test python-test asan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli shared examples test python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI) shared
 
@@ -54,6 +57,8 @@ help:
 	@echo "make test     install deps, build, run every test (Criterion), then every example"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@echo "make tsan     two threads on one model under ThreadSanitizer (tests/tsan/)"
+	@echo "make WERROR=0 ...  any target with warnings not turned into errors"
 	@echo "make MPI=1 [test]  capdyn sweep under mpirun/srun too (build-mpi/; Open MPI: make mpi-deps)"
 	@echo "make bench    benchmarks (bench/)"
 	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
@@ -144,6 +149,17 @@ asan: deps
 	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 build-asan/capdyn_tests --jobs $(JOBS) $(TEST_ARGS)
 	@export ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1; $(call run_examples,$(EXAMPLES:$(BUILD)/%=build-asan/%))
+
+# ThreadSanitizer (issue 24): the core library built with -fsanitize=thread
+# and tests/tsan/two_threads.c, two threads on one shared model (a data
+# each), which must end bit-identical to a run alone with no TSan report.
+$(BUILD)/tsan_two_threads: tests/tsan/two_threads.c $(LIB)
+	$(CC) -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(EXTRA_CFLAGS) -MMD -MP $(EXTRA_LDFLAGS) -pthread -o $@ $< $(LIB) $(LIBS_CORE)
+
+tsan: deps
+	@$(MAKE) --no-print-directory BUILD=build-tsan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=thread" \
+	  EXTRA_LDFLAGS="-fsanitize=thread" build-tsan/tsan_two_threads
+	TSAN_OPTIONS=halt_on_error=1 build-tsan/tsan_two_threads
 
 -include bench/bench.mk
 -include fuzz/fuzz.mk
@@ -252,6 +268,6 @@ capture-map: deps
 	@bash plots/capture_map.sh
 
 clean:
-	rm -rf build build-asan build-fuzz build-mpi figures
+	rm -rf build build-asan build-tsan build-fuzz build-mpi figures
 
 -include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)

@@ -227,6 +227,7 @@ typedef struct cd_data {
     void *integ;          /* private integrator state (GSL objects, buffers) */
     cd_allocator allocator; /* the one that made this data's block */
     void *block;          /* that block */
+    double *state_undo;   /* private: cd_state_set keeps the previous state here while it checks the new one */
 } cd_data;
 
 /* Allocates data for a finalized model and sets the initial state from the
@@ -271,8 +272,13 @@ size_t cd_state_size(const cd_model *m);
 /* Copies the state into buf (cd_state_size doubles). */
 void cd_state_get(const cd_model *m, cd_data *d, double *buf);
 /* Restores a state got from data of the same model; evaluates it (outputs
- * valid on return). CD_EINVAL if buf is not a state of this model's size
- * signature, CD_ENUMERIC if it cannot be evaluated; err may be NULL. */
+ * valid on return). The whole buffer is checked first: CD_EINVAL (err names
+ * the first bad element) if it is not a state of this model's size
+ * signature, a discrete field is not a whole number in its domain (modes,
+ * flags, counts, schedule rows), a value is not finite (a switch time may be
+ * -inf) or a free base's quaternion is not unit within 1e-6; CD_ENUMERIC if
+ * it cannot be evaluated. On any failure d is unchanged (its previous state
+ * is put back; nothing is allocated). err may be NULL. */
 cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_error *err);
 /* dst takes src's complete state (both data of model m). */
 cd_status cd_state_copy(const cd_model *m, cd_data *dst, cd_data *src, cd_error *err);

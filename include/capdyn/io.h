@@ -64,7 +64,9 @@ typedef struct cd_h5_writer cd_h5_writer;
 /* Creates the results file path and writes the static description (model
  * layout, names, attributes: scenario text, capdyn version, creation time).
  * The file is written under a temporary name in path's directory and
- * renamed onto path once that is on disk, so an existing file is never
+ * renamed onto path once that and the first sample (committed at once by
+ * the first cd_h5_append; by cd_h5_close if there is none) are flushed, so
+ * that a file at path always reads whole and an existing file is never
  * truncated, only replaced by a readable one (a symbolic link is followed);
  * the writer then holds an exclusive flock on it until cd_h5_close. Fails
  * with CD_EIO before any simulation if the file cannot be created, if path

@@ -30,7 +30,16 @@ typedef enum {
 } cd_status;
 
 /* A caller-owned error report. Functions that can fail fill it (if non-NULL)
- * with the status and a one-line message; they never print. */
+ * with the status and a one-line message; they never print.
+ *
+ * NULL arguments, the same way in every public function (docs/embedding.md,
+ * tests/test_null_args.c): err may always be NULL. A NULL model, data,
+ * controller, sampler, monitor, writer or required buffer makes a function
+ * returning cd_status return CD_EINVAL (err names the function and the
+ * argument), a constructor return NULL (err filled), a function returning
+ * an id or index -1, a double NaN, a size 0, a pointer NULL; a void function
+ * then does nothing; cd_*_free(NULL) is a no-op. Output pointers documented
+ * as optional (e.g. the parts of cd_momentum) may be NULL. */
 typedef struct {
     cd_status status;
     char msg[512];

@@ -402,6 +402,12 @@ int cmd_info(int argc, char **argv)
         cli_error("%s", err.msg);
         return CLI_FAIL;
     }
+    /* a file is called readable only if every dataset of it reads (issue 28) */
+    if (cd_h5r_verify(r, path, &err) != 0) {
+        cli_error("%s", err.msg);
+        cd_h5r_close(r);
+        return CLI_FAIL;
+    }
     cli_report(stdout, r, path, NULL);
     cd_h5r_close(r);
     return CLI_OK;

@@ -92,6 +92,7 @@ static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw
 int cd_shape_distance(const cd_model *m, int shape, const double p[3], double radius,
                       double *dist, double n[3], double s[3])
 {
+    if (!m || !p || !dist || !n || !s) return -1;
     int type = m->shape_type[shape], fa = m->shape_face_adr[shape];
     (void)radius;
     if (type == CD_SHAPE_CONVEX)
@@ -103,6 +104,7 @@ int cd_shape_distance(const cd_model *m, int shape, const double p[3], double ra
 int cd_shape_distance_ccd(const cd_model *m, int shape, const double p[3], double radius,
                           double *dist, double n[3], double s[3])
 {
+    if (!m || !p || !dist || !n || !s) return -1;
     if (m->shape_type[shape] == CD_SHAPE_PLANE) return -1;
     return cd_geom_ccd(m->shape_type[shape], m->shape_size + 3 * shape,
                        m->vert + 3 * m->shape_vert_adr[shape], m->shape_vert_num[shape], p, radius, 1,
@@ -134,7 +136,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
         int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
         const cd_contact_law *L = &m->law[m->slot_law[k]];
-        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3], c[3], va[3], vb[3], vrel[3], vt[3];
+        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3] = {0, 0, 0}, c[3], va[3], vb[3], vrel[3], vt[3];
         double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
         double *z = d->y + m->ny_slot_adr + 3 * k;
         cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);

@@ -197,16 +197,17 @@ cd_ctrl_phase cd_ctrl_phase_of(const cd_ctrl *c, const cd_data *d)
     if (c->c.detumble && d->user_mode[s + 2]) return CD_CTRL_DETUMBLE;
     return c->c.start_hold || d->user_mode[s + 1] ? CD_CTRL_HOLD : d->user_mode[s] ? CD_CTRL_CLOSING : CD_CTRL_APPROACH;
 }
-double cd_ctrl_t_trigger(const cd_ctrl *c) { return c->t_trig; }
-double cd_ctrl_t_hold(const cd_ctrl *c) { return c->t_hold; }
-double cd_ctrl_t_detumble(const cd_ctrl *c) { return c->t_det; }
+double cd_ctrl_t_trigger(const cd_ctrl *c) { return c ? c->t_trig : NAN; }
+double cd_ctrl_t_hold(const cd_ctrl *c) { return c ? c->t_hold : NAN; }
+double cd_ctrl_t_detumble(const cd_ctrl *c) { return c ? c->t_det : NAN; }
 
 /* The controller's memory: [magic, na, t_trig, t_hold, t_det, q_hold[na]] */
 #define CTRL_STATE_MAGIC 5471.0 /* an arbitrary tag, stored exactly */
-size_t cd_ctrl_state_size(const cd_ctrl *c) { return (size_t)(5 + c->na); }
+size_t cd_ctrl_state_size(const cd_ctrl *c) { return c ? (size_t)(5 + c->na) : 0; }
 
 void cd_ctrl_state_get(const cd_ctrl *c, double *buf)
 {
+    if (!c || !buf) return;
     buf[0] = CTRL_STATE_MAGIC;
     buf[1] = (double)c->na;
     buf[2] = c->t_trig;
@@ -217,6 +218,10 @@ void cd_ctrl_state_get(const cd_ctrl *c, double *buf)
 
 cd_status cd_ctrl_state_set(cd_ctrl *c, const double *buf, cd_error *err)
 {
+    if (!c || !buf) {
+        cd_error_set(err, CD_EINVAL, "cd_ctrl_state_set: %s is NULL", !c ? "the controller" : "the buffer");
+        return CD_EINVAL;
+    }
     if (!buf || buf[0] != CTRL_STATE_MAGIC || buf[1] != (double)c->na) {
         cd_error_set(err, CD_EINVAL, "control: not a state of this controller (expected %d arm joints)", c->na);
         return CD_EINVAL;
@@ -469,6 +474,7 @@ int cd_ctrl_transition(const cd_model *m, cd_data *d, int i, void *user)
 
 double cd_ctrl_base_angle(const cd_ctrl *c, const cd_model *m, const cd_data *d)
 {
+    if (!c || !m || !d) return NAN;
     const double *R = d->body_R + 9 * m->sys_body_adr[c->c.sys];
     double tr = 0;
     int i, j;

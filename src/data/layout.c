@@ -4,6 +4,7 @@
 #include "capdyn/data.h"
 
 #include <math.h>
+#include <string.h>
 
 static const char *ev_names[CD_EV_NKINDS] = {
     "onset", "separation", "stick_slip", "slip_stick", "slip_turn", "geometry_failure",
@@ -20,6 +21,7 @@ const char *cd_slot_mode_name(cd_slot_mode mo)
 
 const cd_event *cd_data_event(const cd_data *d, long i)
 {
+    if (!d) return NULL;
     long held = d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap;
     long first = d->ev_count - held;
     if (i < 0 || i >= held) return NULL;
@@ -41,6 +43,10 @@ cd_sys_state cd_state_of(const cd_model *m, const cd_data *d, int s)
 {
     cd_sys_state r;
     int pos, q, vel, qd;
+    if (!m || !d) {
+        memset(&r, 0, sizeof r);
+        return r;
+    }
     sys_layout(m, s, &pos, &q, &vel, &qd);
     r.njoint = m->sys_nbody[s] - 1;
     r.pos = pos >= 0 ? d->y + pos : NULL;
@@ -54,6 +60,7 @@ cd_sys_state cd_state_of(const cd_model *m, const cd_data *d, int s)
 
 double cd_joint_q(const cd_model *m, const cd_data *d, int b)
 {
+    if (!m || !d) return NAN;
     int s = m->body_sys[b];
     if (m->body_parent[b] < 0) return 0.0;
     return cd_state_of(m, d, s).q[b - m->sys_body_adr[s] - 1];
@@ -61,6 +68,7 @@ double cd_joint_q(const cd_model *m, const cd_data *d, int b)
 
 double cd_joint_qd(const cd_model *m, const cd_data *d, int b)
 {
+    if (!m || !d) return NAN;
     int s = m->body_sys[b];
     if (m->body_parent[b] < 0) return 0.0;
     return cd_state_of(m, d, s).qd[b - m->sys_body_adr[s] - 1];

@@ -32,6 +32,7 @@ static void body_inertias(const cd_model *m, cd_data *d, int s)
 
 void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udot, double *tau)
 {
+    if (!m || !d || !tau) return;
     int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], b, i;
     int free_base = m->sys_base_type[s] == CD_BASE_FREE, j0 = free_base ? 6 : 0;
     cd_rbi *I = (cd_rbi *)d->body_rbi;
@@ -75,6 +76,7 @@ void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udo
 
 void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
 {
+    if (!m || !d || !H) return;
     int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], n = m->sys_ndof[s], b, i, k;
     int free_base = m->sys_base_type[s] == CD_BASE_FREE, j0 = free_base ? 6 : 0;
     cd_rbi *I = (cd_rbi *)d->body_rbi, *Ic = (cd_rbi *)d->body_rbi + m->nbody;
@@ -131,7 +133,11 @@ static int prescribed_acc(const cd_model *m, const cd_data *d, int s, double *a,
     return np;
 }
 
-cd_status cd_forward_dynamics(const cd_model *m, cd_data *d) { return cd_forward_dynamics_method(m, d, CD_FD_AUTO); }
+cd_status cd_forward_dynamics(const cd_model *m, cd_data *d)
+{
+    if (!m || !d) return CD_EINVAL;
+    return cd_forward_dynamics_method(m, d, CD_FD_AUTO);
+}
 
 /* ABA (aba.c) from CD_ABA_MIN_DOF on, measured crossover (docs/performance.md) */
 cd_status cd_forward_dynamics_method(const cd_model *m, cd_data *d, cd_fd_method method)
@@ -192,6 +198,7 @@ cd_status cd_forward_dynamics_method(const cd_model *m, cd_data *d, cd_fd_method
 void cd_momentum(const cd_model *m, const cd_data *d, int s, double *ke, double P[3],
                  double Lc[3], double Lo[3], double com[3])
 {
+    if (!m || !d) return;
     int b0 = m->sys_body_adr[s], b;
     double e = 0, p[3] = {0, 0, 0}, L[3] = {0, 0, 0}, c[3] = {0, 0, 0}, M = 0;
     for (b = b0; b < b0 + m->sys_nbody[s]; b++) {
@@ -222,6 +229,7 @@ void cd_momentum(const cd_model *m, const cd_data *d, int s, double *ke, double 
 
 double cd_potential_energy(const cd_model *m, const cd_data *d, int s)
 {
+    if (!m || !d) return NAN;
     int b0 = m->sys_body_adr[s], b;
     double u = 0;
     for (b = b0; b < b0 + m->sys_nbody[s]; b++)

@@ -10,6 +10,7 @@
 
 void cd_point_jacobian(const cd_model *m, const cd_data *d, int body, const double p_body[3], double *J)
 {
+    if (!m || !d || !p_body || !J) return;
     int s = m->body_sys[body], n = m->sys_ndof[s], b0 = m->sys_body_adr[s], a, k;
     int j0 = m->sys_base_type[s] == CD_BASE_FREE ? 6 : 0;
     double p[3], r[3], c[3];
@@ -49,6 +50,10 @@ void cd_point_jacobian(const cd_model *m, const cd_data *d, int body, const doub
 cd_status cd_generalized_jacobian(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
                                   cd_error *err)
 {
+    if (!m || !d || !p_body || !Jg) {
+        cd_error_set(err, CD_EINVAL, "cd_generalized_jacobian: %s is NULL", !m ? "the model" : !d ? "the data" : !p_body ? "p_body" : "Jg");
+        return CD_EINVAL;
+    }
     int s = m->body_sys[body], n = m->sys_ndof[s], nj = n - 6, i, j, k;
     double *J = d->jwork, *Hb = J + 6 * n, *X = Hb + 36;
     if (m->sys_base_type[s] != CD_BASE_FREE) {

@@ -1,9 +1,15 @@
 /* HDF5 results writer (include/capdyn/io.h; layout in docs/results-format.md).
  *
  * Kill safety (docs/reliability.md, "Results files"). HDF5 1.10 has no
- * journal, so the writer keeps three rules that together make every
- * committed sample survive a kill at any write (tests/test_results_safety.c
- * kills a run at every one of its writes):
+ * journal, so the writer keeps these rules that together make every
+ * committed sample survive a kill at any write, and every dataset of a
+ * file at the requested name readable (tests/test_results_safety.c kills
+ * a run at every one of its writes):
+ *  0. The file is written under a temporary name and takes its name only
+ *     after its first commit (the layout and the first sample, which the
+ *     first cd_h5_append commits at once) is flushed (issue 28: renamed
+ *     after the layout alone, a kill inside the first commit left a file
+ *     with no dataset that read).
  *  1. The file is touched ONLY inside a commit: samples and events are
  *     buffered by cd_h5_append; a commit (cd_h5_flush, or a full buffer)
  *     writes every pending row and flushes (H5Fflush), then rewrites the
@@ -31,6 +37,12 @@
  *     (measured on the whole Fig. 5 run: 9 of 507 kill points, all in the
  *     commit where /contacts/ft etc. passed 64 chunks). Chunks are sized
  *     from the run's expected sample count (CD_H5_MAX_CHUNKS).
+ *  5. Every chunk index exists before the first commit (make_chunk_index:
+ *     the event table's would otherwise be created by its first event).
+ *  6. Before a commit the superblock's end of allocation is moved past
+ *     what the commit can add (reserve_eoa), so that no chunk index on disk
+ *     points past it and a plain (non-SWMR) HDF5 open reads every dataset
+ *     after a kill inside a commit.
  * What is not covered: a run longer than expected (a library caller
  * without a scenario, sc == NULL), or so long that 60 chunks of 4 MiB do
  * not hold a series, splits the index again; the window is a few writes
@@ -72,6 +84,7 @@
 #include "h5_util.h"
 #include "h5_schema.h"
 #include <errno.h>
+#include <stdint.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -160,6 +173,11 @@ struct cd_h5_writer {
     double reserve;               /* bytes the check keeps free beyond its estimate */
     long long expect_rows;        /* samples the run expects (duration / output_dt + 2), 0 if unknown */
     int compress;                 /* deflate the sample series (simulation.compress, default 1) */
+    /* The file is written under a temporary name until its first commit
+     * (the layout and the first sample) is flushed: claim_tmp is that name,
+     * claim_target the name it then takes (NULL once renamed). */
+    char *claim_tmp, *claim_target;
+    int claim_keep;               /* keep claim_tmp at the end (its rename failed) */
 };
 
 /* ---- error plumbing --------------------------------------------------------- */
@@ -613,6 +631,26 @@ static int write_rows(h5_series *s, long long start, int n)
     return r < 0 ? -1 : 0;
 }
 
+/* The event table's chunk index exists from the layout on (issue 28). HDF5
+ * creates the index of a chunked dataset only with its first chunk; a first
+ * event in a later commit would create its root node at the end of the file
+ * and rewrite the dataset's header to point there, and HDF5 writes the
+ * header first (address order): a kill between the two left the event
+ * table unreadable ("wrong B-tree signature"). So one zero row is written
+ * and flushed, then the table is cut back to 0 rows: the chunk leaves the
+ * index, the (empty) root node stays. */
+static int make_chunk_index(cd_h5_writer *w)
+{
+    hsize_t one = 1, zero = 0;
+    cd_event e;
+    herr_t r;
+    memset(&e, 0, sizeof e);
+    if (H5Dset_extent(w->ev_dset, &one) < 0) return -1;
+    r = H5Dwrite(w->ev_dset, w->ev_mtype, H5S_ALL, H5S_ALL, H5P_DEFAULT, &e);
+    if (r < 0 || H5Dflush(w->ev_dset) < 0 || H5Dset_extent(w->ev_dset, &zero) < 0) return -1;
+    return 0;
+}
+
 static int write_events(cd_h5_writer *w)
 {
     hsize_t dim, off, cnt;
@@ -726,6 +764,160 @@ static cd_status write_failed(cd_h5_writer *w, cd_error *err, const char *what)
     return CD_EIO;
 }
 
+/* The file takes its name (rule 0 at the top of the file): called once its
+ * first commit is flushed. Under the directory lock, as in claim_output, a
+ * target that another writer took meanwhile (it holds the file's lock) is
+ * refused; then this writer stops and its temporary file is removed. */
+static cd_status name_file(cd_h5_writer *w, cd_error *err)
+{
+    char *dcopy = malloc(strlen(w->claim_target) + 1);
+    int dir_fd = -1, fd, busy = 0;
+    if (!dcopy) {
+        seterr(err, CD_ENOMEM, "out of memory");
+        return CD_ENOMEM;
+    }
+    strcpy(dcopy, w->claim_target);
+    dir_fd = open(dirname(dcopy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    free(dcopy);
+    if (dir_fd >= 0) (void)flock(dir_fd, LOCK_EX);
+    fd = open(w->claim_target, O_RDONLY | O_NOCTTY | O_CLOEXEC);
+    if (fd >= 0) {
+        busy = flock(fd, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+        close(fd); /* drops the probe's lock */
+    }
+    if (busy) {
+        snprintf(w->why, sizeof w->why,
+                 "cannot write results file '%s': another run is writing it (the file is locked); "
+                 "choose another -o or wait for that run to end",
+                 w->path);
+    } else if (rename(w->claim_tmp, w->claim_target) != 0) {
+        snprintf(w->why, sizeof w->why, "cannot create results file '%s': renaming '%s' onto it failed: %s; "
+                 "the results so far are in '%s'", w->path, w->claim_tmp, strerror(errno), w->claim_tmp);
+        w->claim_keep = 1;
+    } else {
+        free(w->claim_tmp);
+        w->claim_tmp = NULL;
+    }
+    if (dir_fd >= 0) close(dir_fd);
+    if (!w->claim_tmp) return CD_OK;
+    w->failed = 1;
+    seterr(err, CD_EIO, "%s", w->why);
+    return CD_EIO;
+}
+
+/* ---- rule 6: the end of allocation on disk covers the next commit ---------- */
+/* The "end of allocation" (EOA) a plain HDF5 reader trusts is the one in the
+ * superblock, which HDF5 writes last in a flush; a commit first writes its
+ * new chunks beyond it, then the chunk index nodes that point there. A kill
+ * between the two left a file that HDF5 opened in plain (non-SWMR) mode
+ * refused to read past the old EOA ("addr overflow": h5dump, h5py without
+ * swmr=True). So before a commit the file is extended (sparse, ftruncate)
+ * to the current EOA plus a bound of what the commit adds, and the
+ * superblock's EOA field is set to that end (in place, checksum updated).
+ * HDF5 then allocates below it, and its own superblock written at the end
+ * of the flush sets the true EOA again. The superblock is version 2 (the
+ * space strategy needs it): signature, version 2, offset and length sizes 8,
+ * flags, base address, extension address, EOA at byte 28, root header
+ * address, then a Jenkins lookup3 checksum of the 44 bytes before it. A
+ * superblock that does not parse or whose checksum does not verify is left
+ * alone (the commit proceeds as before, with the window). */
+static uint32_t rot32(uint32_t x, int k) { return (x << k) | (x >> (32 - k)); }
+
+/* Bob Jenkins' lookup3 hash (hashlittle, initial value 0), which HDF5 uses
+ * for its metadata checksums. */
+static uint32_t lookup3(const unsigned char *k, size_t len)
+{
+    uint32_t a, b, c;
+    a = b = c = 0xdeadbeefu + (uint32_t)len;
+    while (len > 12) {
+        a += k[0] + ((uint32_t)k[1] << 8) + ((uint32_t)k[2] << 16) + ((uint32_t)k[3] << 24);
+        b += k[4] + ((uint32_t)k[5] << 8) + ((uint32_t)k[6] << 16) + ((uint32_t)k[7] << 24);
+        c += k[8] + ((uint32_t)k[9] << 8) + ((uint32_t)k[10] << 16) + ((uint32_t)k[11] << 24);
+        a -= c; a ^= rot32(c, 4); c += b;
+        b -= a; b ^= rot32(a, 6); a += c;
+        c -= b; c ^= rot32(b, 8); b += a;
+        a -= c; a ^= rot32(c, 16); c += b;
+        b -= a; b ^= rot32(a, 19); a += c;
+        c -= b; c ^= rot32(b, 4); b += a;
+        len -= 12;
+        k += 12;
+    }
+    if (len == 0) return c;
+    {
+        uint32_t t[3] = {0, 0, 0};
+        size_t i;
+        for (i = 0; i < len; i++) t[i / 4] += (uint32_t)k[i] << (8 * (i % 4));
+        a += t[0];
+        b += t[1];
+        c += t[2];
+    }
+    c ^= b; c -= rot32(b, 14);
+    a ^= c; a -= rot32(c, 11);
+    b ^= a; b -= rot32(a, 25);
+    c ^= b; c -= rot32(b, 16);
+    a ^= c; a -= rot32(c, 4);
+    b ^= a; b -= rot32(a, 14);
+    c ^= b; c -= rot32(b, 24);
+    return c;
+}
+
+static uint64_t get_le(const unsigned char *p, int n)
+{
+    uint64_t v = 0;
+    int i;
+    for (i = n - 1; i >= 0; i--) v = (v << 8) | p[i];
+    return v;
+}
+static void put_le(unsigned char *p, uint64_t v, int n)
+{
+    int i;
+    for (i = 0; i < n; i++, v >>= 8) p[i] = (unsigned char)(v & 0xff);
+}
+
+/* Reads the superblock of the file open at fd: 0 and its EOA if it is a
+ * version 2 superblock at offset 0 whose checksum verifies, else -1. */
+static int sb_read(int fd, unsigned char sb[48], uint64_t *eoa)
+{
+    static const unsigned char sig[8] = {0x89, 'H', 'D', 'F', '\r', '\n', 0x1a, '\n'};
+    if (fd < 0 || pread(fd, sb, 48, 0) != 48) return -1;
+    if (memcmp(sb, sig, 8) != 0 || sb[8] != 2 || sb[9] != 8 || sb[10] != 8 || get_le(sb + 12, 8) != 0) return -1;
+    if (lookup3(sb, 44) != (uint32_t)get_le(sb + 44, 4)) return -1;
+    *eoa = get_le(sb + 28, 8);
+    return 0;
+}
+
+static void reserve_eoa(cd_h5_writer *w, double need)
+{
+    unsigned char sb[48];
+    uint64_t disk_eoa, end;
+    haddr_t eoa;
+    struct stat st;
+    struct rlimit rl;
+    if (need <= 0 || need > 1e15 || H5Fget_eoa(w->file, &eoa) < 0 || sb_read(w->lock_fd, sb, &disk_eoa) < 0 ||
+        fstat(w->lock_fd, &st) != 0)
+        return;
+    end = (uint64_t)eoa + (uint64_t)need;
+    if (end < disk_eoa) end = disk_eoa;
+    /* never past the file size limit (that would be SIGXFSZ, not an error) */
+    if (getrlimit(RLIMIT_FSIZE, &rl) == 0 && rl.rlim_cur != RLIM_INFINITY && (double)end > (double)rl.rlim_cur) return;
+    if ((uint64_t)st.st_size < end && ftruncate(w->lock_fd, (off_t)end) != 0) return;
+    put_le(sb + 28, end, 8);
+    put_le(sb + 44, lookup3(sb, 44), 4);
+    (void)pwrite(w->lock_fd, sb, 48, 0); /* one write of 48 bytes: whole or not at all */
+}
+
+/* After a commit and after the close: the file ends at the EOA its
+ * superblock says again (the reserve is cut), so that between commits its
+ * size is what HDF5 wrote. */
+static void trim_to_eoa(int fd)
+{
+    unsigned char sb[48];
+    uint64_t eoa;
+    struct stat st;
+    if (sb_read(fd, sb, &eoa) == 0 && fstat(fd, &st) == 0 && (uint64_t)st.st_size > eoa)
+        (void)ftruncate(fd, (off_t)eoa);
+}
+
 /* The commit protocol (see the top of the file). */
 static cd_status commit(cd_h5_writer *w, cd_error *err)
 {
@@ -738,6 +930,7 @@ static cd_status commit(cd_h5_writer *w, cd_error *err)
         seterr(err, CD_EIO, "%s", w->why);
         return CD_EIO;
     }
+    reserve_eoa(w, commit_bytes(w));
     for (i = 0; i < w->nser; i++)
         if (write_rows(w->ser + i, w->nwritten, w->nbuf) < 0) {
             snprintf(what, sizeof what, "writing %d samples", w->nbuf);
@@ -753,6 +946,9 @@ static cd_status commit(cd_h5_writer *w, cd_error *err)
         attr_i64(w->file, "committed_samples", w->nwritten) < 0 || H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0)
         return write_failed(w, err, "committing the sample counters");
     w->ncommitted = w->nwritten;
+    trim_to_eoa(w->lock_fd); /* the reserve of rule 6 is not needed any more */
+    /* the layout and the first sample are on disk: the file takes its name */
+    if (w->claim_tmp && w->ncommitted > 0) return name_file(w, err);
     return CD_OK;
 }
 
@@ -802,6 +998,11 @@ static void writer_free(cd_h5_writer *w)
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
     if (w->owner_enum >= 0) H5Tclose(w->owner_enum);
     if (w->file >= 0) H5Fclose(w->file);
+    if (!w->failed && w->file >= 0) trim_to_eoa(w->lock_fd);
+    /* a file that never got its name holds no committed sample */
+    if (w->claim_tmp && !w->claim_keep) unlink(w->claim_tmp);
+    free(w->claim_tmp);
+    free(w->claim_target);
     if (w->lock_fd >= 0) close(w->lock_fd);
     free(w->path);
     free(w);
@@ -943,7 +1144,7 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
         w->ev_dset = H5Dcreate2(w->file, "events", w->ev_ftype, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
         H5Pclose(dcpl);
         H5Sclose(sp);
-        if (w->ev_dset < 0) return -1;
+        if (w->ev_dset < 0 || make_chunk_index(w) < 0) return -1;
         for (k = 0; k < CD_EV_NKINDS; k++) kn[k] = cd_event_kind_name((cd_event_kind)k);
         attr_strv(w->ev_dset, "kind_names", CD_EV_NKINDS, kn, 24);
         attr_i64(w->ev_dset, "lost", 0);
@@ -1231,22 +1432,6 @@ fail:
     return -1;
 }
 
-/* The temporary file becomes the target; the directory lock is dropped. */
-static int claim_commit(out_claim *c, const char *path, cd_error *err)
-{
-    int rc = rename(c->tmp, c->target);
-    if (rc != 0) {
-        seterr(err, CD_EIO, "cannot create results file '%s': renaming '%s' onto it failed: %s", path, c->tmp,
-               strerror(errno));
-        return -1;
-    }
-    free(c->tmp);
-    c->tmp = NULL;
-    close(c->dir_fd);
-    c->dir_fd = -1;
-    return 0;
-}
-
 cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenario *sc, cd_error *err)
 {
     cd_h5_writer *w;
@@ -1314,15 +1499,13 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         return NULL;
     }
     cd_h5_quiet_end(&q);
-    if (claim_commit(&c, path, err) < 0) {
-        cd_h5_quiet_begin(&q);
-        writer_free(w);
-        cd_h5_quiet_end(&q);
-        claim_release(&c);
-        return NULL;
-    }
-    /* the lock is held (on the renamed file) until writer_free */
+    /* the file keeps its temporary name until its first commit (name_file);
+     * the directory lock is dropped meanwhile, the file's lock is held
+     * until writer_free */
+    w->claim_tmp = c.tmp;
+    w->claim_target = c.target;
     w->lock_fd = c.lock_fd;
+    c.tmp = c.target = NULL;
     c.lock_fd = -1;
     claim_release(&c);
     return w;
@@ -1474,7 +1657,9 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     }
     w->nbuf++;
     fin = check_finite(w, d->t, err); /* the row is kept either way */
-    if (w->nbuf == w->cap_rows) {
+    /* a full buffer commits; so does the first sample, after which the file
+     * takes its name */
+    if (w->nbuf == w->cap_rows || w->claim_tmp) {
         cd_h5_quiet q;
         cd_status st;
         cd_error cerr;
@@ -1574,6 +1759,11 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
                 else w->failed = 1;
             }
         }
+    }
+    /* a run without samples: the file takes its name once all is flushed */
+    if (!w->failed && w->claim_tmp) {
+        cd_status nst = name_file(w, st == CD_OK ? err : &tmp);
+        if (st == CD_OK) st = nst;
     }
     writer_free(w);
     cd_h5_quiet_end(&q);

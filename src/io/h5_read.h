@@ -89,6 +89,10 @@ int cd_h5r_attr_i64(const cd_h5r *r, const char *obj, const char *name, long lon
 cd_event *cd_h5r_events(const cd_h5r *r, long *n, cd_error *err);
 /* System index by its name or group name; -1 if none. */
 int cd_h5r_system(const cd_h5r *r, const char *name);
+/* Reads every dataset of the file in full (every row on disk, not only the
+ * committed ones), as h5dump would. 0 if all read; -1 with err (CD_EIO,
+ * naming path and the first dataset that does not read) otherwise. */
+int cd_h5r_verify(const cd_h5r *r, const char *path, cd_error *err);
 
 #ifdef __cplusplus
 }

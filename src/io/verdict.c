@@ -233,6 +233,10 @@ cd_monitor_opts cd_scenario_monitor_opts(const cd_scenario *sc)
 cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, const cd_monitor_opts *opt,
                           cd_error *err)
 {
+    if (!mo || !m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_monitor_init: %s is NULL", !mo ? "the monitor" : !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     int first[MAXF], nf, f, k, hb;
     double reach = 0, xp[3], Rp[9];
     memset(mo, 0, sizeof *mo);
@@ -281,6 +285,7 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
 
 void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
 {
+    if (!mo || !m || !d) return;
     int hand = mo->opt.hand, obj = mo->opt.object, hb = palm_of(m, &mo->opt), ob = m->sys_body_adr[obj], k, b;
     int hend = m->sys_body_adr[hand] + m->sys_nbody[hand];
     unsigned long h = 1469598103UL;
@@ -343,6 +348,10 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
 cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_data *d, double *eps, int *closure,
                              cd_error *err)
 {
+    if (!mo || !m || !d || !eps) {
+        cd_error_set(err, CD_EINVAL, "cd_monitor_quality: %s is NULL", !mo ? "the monitor" : !m ? "the model" : !d ? "the data" : "eps");
+        return CD_EINVAL;
+    }
     enum { MAXC = 256 };
     cd_grasp_contact ct[MAXC];
     cd_grasp_options op = cd_grasp_options_default();

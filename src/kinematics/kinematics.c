@@ -7,6 +7,7 @@
 
 void cd_kinematics(const cd_model *m, cd_data *d)
 {
+    if (!m || !d) return;
     int s, b;
     for (s = 0; s < m->nsys; s++) {
         cd_sys_state st = cd_state_of(m, d, s);
@@ -71,6 +72,7 @@ void cd_kinematics(const cd_model *m, cd_data *d)
 void cd_point_world(const cd_model *m, const cd_data *d, int b, const double pb[3],
                     double pw[3], double vw[3])
 {
+    if (!m || !d || !pb) return;
     double t[3], p[3];
     (void)m;
     cd_m3_mulv(t, d->body_R + 9 * b, pb);

@@ -85,6 +85,10 @@ cd_options cd_options_default(void)
 
 cd_status cd_options_check(const cd_options *o, cd_error *err)
 {
+    if (!o) {
+        cd_error_set(err, CD_EINVAL, "cd_options_check: %s is NULL", "the options");
+        return CD_EINVAL;
+    }
     if (!o) { seterr(err, CD_EINVAL, "options are NULL"); return CD_EINVAL; }
     if (o->stepper < 0 || o->stepper >= CD_STEP_NTYPES) { seterr(err, CD_EINVAL, "unknown stepper %d", (int)o->stepper); return CD_EINVAL; }
     if (!(isfinite(o->rtol) && isfinite(o->atol) && o->rtol >= 0 && o->atol >= 0 && o->rtol + o->atol > 0)) {
@@ -177,6 +181,25 @@ static char *dupstr(const char *s)
     r = malloc(strlen(s) + 1);
     if (r) strcpy(r, s);
     return r;
+}
+
+/* A body or link as messages name it: 'name' in quotes, or, unnamed, its
+ * place ("the unnamed link 2 of system 'arm'", "body 3 (unnamed)"), so
+ * that no message says "joint ''" (issue 24). */
+static const char *body_label(const cd_model *m, int b, char *buf, size_t len)
+{
+    const char *n = b >= 0 && b < m->nbody ? m->body_name[b] : NULL;
+    if (n && n[0]) snprintf(buf, len, "'%s'", n);
+    else snprintf(buf, len, "body %d (unnamed)", b);
+    return buf;
+}
+static const char *link_label(const cd_model *m, int sys, const char *name, char *buf, size_t len)
+{
+    if (name && name[0]) snprintf(buf, len, "'%s'", name);
+    else if (sys >= 0 && sys < m->nsys)
+        snprintf(buf, len, "the unnamed link %d of system '%s'", m->sys_nbody[sys], m->sys_name[sys]);
+    else snprintf(buf, len, "an unnamed link");
+    return buf;
 }
 
 cd_model *cd_model_create(void)
@@ -399,46 +422,47 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
 
 int cd_model_add_link(cd_model *m, int sys, const cd_link_desc *l, cd_error *err)
 {
+    char nmbuf[160];
     const char *why, *nm;
     double ax[3];
     int b;
     FROZEN_CHECK(-1);
     if (!l) { seterr(err, CD_EINVAL, "link description is NULL"); return -1; }
-    nm = l->name ? l->name : "";
-    if (sys < 0 || sys >= m->nsys) { seterr(err, CD_EINVAL, "link '%s': no system %d", nm, sys); return -1; }
+    nm = link_label(m, sys, l->name, nmbuf, sizeof nmbuf);
+    if (sys < 0 || sys >= m->nsys) { seterr(err, CD_EINVAL, "link %s: no system %d", nm, sys); return -1; }
     if (sys != m->nsys - 1) {
-        seterr(err, CD_EINVAL, "link '%s': links must be added to the most recently added system", nm);
+        seterr(err, CD_EINVAL, "link %s: links must be added to the most recently added system", nm);
         return -1;
     }
     if (l->parent < m->sys_body_adr[sys] || l->parent >= m->nbody) {
-        seterr(err, CD_EINVAL, "link '%s': parent %d is not an existing body of system '%s'", nm,
+        seterr(err, CD_EINVAL, "link %s: parent %d is not an existing body of system '%s'", nm,
                l->parent, m->sys_name[sys]);
         return -1;
     }
     if (l->type != CD_JOINT_REVOLUTE && l->type != CD_JOINT_PRISMATIC) {
-        seterr(err, CD_EINVAL, "link '%s': joint type must be revolute or prismatic", nm);
+        seterr(err, CD_EINVAL, "link %s: joint type must be revolute or prismatic", nm);
         return -1;
     }
     if (!(l->mass > 0) || !isfinite(l->mass)) {
-        seterr(err, CD_EINVAL, "link '%s': mass must be a positive finite number, got %g", nm, l->mass);
+        seterr(err, CD_EINVAL, "link %s: mass must be a positive finite number, got %g", nm, l->mass);
         return -1;
     }
     if ((why = inertia_problem(l->inertia)) != NULL) {
-        seterr(err, CD_EINVAL, "link '%s': %s", nm, why);
+        seterr(err, CD_EINVAL, "link %s: %s", nm, why);
         return -1;
     }
     if (!finite_n(l->pos, 3) || !finite_n(l->com, 3) || !finite_n(l->rot, 9) || !finite_n(l->axis, 3) ||
         !isfinite(l->q0) || !isfinite(l->qd0)) {
-        seterr(err, CD_EINVAL, "link '%s': non-finite value in position, axis, CoM or initial state", nm);
+        seterr(err, CD_EINVAL, "link %s: non-finite value in position, axis, CoM or initial state", nm);
         return -1;
     }
     if (!is_rotation(l->rot)) {
-        seterr(err, CD_EINVAL, "link '%s': joint frame rotation is not a proper rotation", nm);
+        seterr(err, CD_EINVAL, "link %s: joint frame rotation is not a proper rotation", nm);
         return -1;
     }
     cd_v3_copy(ax, l->axis);
     if (cd_v3_normalize(ax) < 1e-12) {
-        seterr(err, CD_EINVAL, "link '%s': joint axis is zero", nm);
+        seterr(err, CD_EINVAL, "link %s: joint axis is zero", nm);
         return -1;
     }
     b = new_body(m, l->name, sys, l->parent, l->type, l->pos, l->rot, ax, l->mass, l->com,
@@ -746,6 +770,10 @@ int cd_model_add_actuator(cd_model *m, const cd_actuator_desc *a, cd_error *err)
 
 cd_status cd_model_set_actuator(cd_model *m, int body, const cd_actuator *a, cd_error *err)
 {
+    if (!m) { /* (a NULL actuator is refused below, naming the joint) */
+        cd_error_set(err, CD_EINVAL, "cd_model_set_actuator: %s is NULL", "the model");
+        return CD_EINVAL;
+    }
     cd_actuator_desc d = cd_actuator_desc_default();
     double one = 1.0;
     char what[160];
@@ -843,44 +871,49 @@ int cd_model_add_finger(cd_model *m, const cd_finger_desc *f, cd_error *err)
 
 cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_error *err)
 {
+    char nmbuf[160];
+    if (!m || !p) {
+        cd_error_set(err, CD_EINVAL, "cd_model_set_joint: %s is NULL", !m ? "the model" : "the joint properties");
+        return CD_EINVAL;
+    }
     const char *nm;
     int bad;
     FROZEN_CHECK(CD_EINVAL);
     if (!is_joint(m, b)) { seterr(err, CD_EINVAL, "joint properties: body %d is not a joint body", b); return CD_EINVAL; }
-    nm = m->body_name[b];
-    if (!p) { seterr(err, CD_EINVAL, "joint '%s': properties are NULL", nm); return CD_EINVAL; }
+    nm = body_label(m, b, nmbuf, sizeof nmbuf);
+    if (!p) { seterr(err, CD_EINVAL, "joint %s: properties are NULL", nm); return CD_EINVAL; }
     if (!(p->stiffness >= 0) || !isfinite(p->stiffness) || !isfinite(p->rest) || !(p->damping >= 0) ||
         !isfinite(p->damping) || !(p->friction >= 0) || !isfinite(p->friction) || !(p->friction_k >= 0) ||
         !isfinite(p->friction_k) || !(p->friction_d >= 0) || !isfinite(p->friction_d)) {
-        seterr(err, CD_EINVAL, "joint '%s': stiffness, damping and friction must be finite and >= 0", nm);
+        seterr(err, CD_EINVAL, "joint %s: stiffness, damping and friction must be finite and >= 0", nm);
         return CD_EINVAL;
     }
     if (p->limited) {
         if (!isfinite(p->lower) || !isfinite(p->upper) || !(p->lower < p->upper)) {
-            seterr(err, CD_EINVAL, "joint '%s': limits must be finite with lower < upper (got %g, %g)", nm, p->lower, p->upper);
+            seterr(err, CD_EINVAL, "joint %s: limits must be finite with lower < upper (got %g, %g)", nm, p->lower, p->upper);
             return CD_EINVAL;
         }
         if (!(p->stop_K >= 0) || !isfinite(p->stop_K) || !(p->stop_D >= 0) || !isfinite(p->stop_D) ||
             !(p->stop_p == 0 || p->stop_p >= 1) || !isfinite(p->stop_p) || !(p->stop_q >= 0) || !isfinite(p->stop_q)) {
-            seterr(err, CD_EINVAL, "joint '%s': stop law needs K, D >= 0, p >= 1, q > 0 (0 = default)", nm);
+            seterr(err, CD_EINVAL, "joint %s: stop law needs K, D >= 0, p >= 1, q > 0 (0 = default)", nm);
             return CD_EINVAL;
         }
     }
     if (p->prescribe < CD_PRESCRIBE_NONE || p->prescribe > CD_PRESCRIBE_WAYPOINTS) {
-        seterr(err, CD_EINVAL, "joint '%s': unknown prescribed-motion type", nm);
+        seterr(err, CD_EINVAL, "joint %s: unknown prescribed-motion type", nm);
         return CD_EINVAL;
     }
     if (p->prescribe == CD_PRESCRIBE_VELOCITY && (!isfinite(p->presc_v) || !isfinite(p->presc_t0))) {
-        seterr(err, CD_EINVAL, "joint '%s': prescribed velocity and start time must be finite", nm);
+        seterr(err, CD_EINVAL, "joint %s: prescribed velocity and start time must be finite", nm);
         return CD_EINVAL;
     }
     if (p->prescribe == CD_PRESCRIBE_WAYPOINTS) {
         if (!p->presc_t || !p->presc_q || p->npresc < 1) {
-            seterr(err, CD_EINVAL, "joint '%s': prescribed waypoints need at least one (t, q) row", nm);
+            seterr(err, CD_EINVAL, "joint %s: prescribed waypoints need at least one (t, q) row", nm);
             return CD_EINVAL;
         }
         if ((bad = rows_ok(p->presc_t, p->presc_q, p->npresc)) >= 0) {
-            seterr(err, CD_EINVAL, "joint '%s': waypoint %d: times must be finite and strictly increasing", nm, bad);
+            seterr(err, CD_EINVAL, "joint %s: waypoint %d: times must be finite and strictly increasing", nm, bad);
             return CD_EINVAL;
         }
         m->body_wp_adr[b] = add_rows(m, p->presc_t, p->presc_q, p->npresc);
@@ -908,6 +941,10 @@ cd_status cd_model_set_joint(cd_model *m, int b, const cd_joint_props *p, cd_err
 
 cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const double w[3], cd_error *err)
 {
+    if (!m || !v || !w) {
+        cd_error_set(err, CD_EINVAL, "cd_model_prescribe_base: %s is NULL", !m ? "the model" : !v ? "v" : "w");
+        return CD_EINVAL;
+    }
     int b;
     FROZEN_CHECK(CD_EINVAL);
     if (sys < 0 || sys >= m->nsys || m->sys_base_type[sys] != CD_BASE_FREE) {
@@ -930,6 +967,10 @@ cd_status cd_model_prescribe_base(cd_model *m, int sys, const double v[3], const
 
 cd_status cd_model_set_user_switches(cd_model *m, int n, cd_error *err)
 {
+    if (!m) {
+        cd_error_set(err, CD_EINVAL, "cd_model_set_user_switches: %s is NULL", "the model");
+        return CD_EINVAL;
+    }
     FROZEN_CHECK(CD_EINVAL);
     if (n < 0 || n > 1000000) { seterr(err, CD_EINVAL, "user switches: count %d out of range [0, 1e6]", n); return CD_EINVAL; }
     m->nuser = n;
@@ -1008,7 +1049,9 @@ static cd_status finalize_joints(cd_model *m, cd_error *err)
             double *L = m->body_limit + 6 * b, Ia = subtree_axis_inertia(m, b);
             if (Ia < 0) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
             if (m->body_q0[b] < L[0] || m->body_q0[b] > L[1]) {
-                seterr(err, CD_EINVAL, "joint '%s': initial position %g is outside its limits [%g, %g]", m->body_name[b],
+                char lb[160];
+                seterr(err, CD_EINVAL, "joint %s: initial position %g is outside its limits [%g, %g]",
+                       body_label(m, b, lb, sizeof lb),
                        m->body_q0[b], L[0], L[1]);
                 return CD_EINVAL;
             }
@@ -1279,6 +1322,10 @@ out:
 
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
+    if (!m) {
+        cd_error_set(err, CD_EINVAL, "cd_model_finalize: %s is NULL", "the model");
+        return CD_EINVAL;
+    }
     int s, b, i, k, nslot = 0, ny = 0, nv = 0;
     if (!m) { seterr(err, CD_EINVAL, "model is NULL"); return CD_EINVAL; }
     if (m->finalized) return CD_OK;

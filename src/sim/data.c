@@ -73,6 +73,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(finger_theta, m->nfinger); CARVE(finger_t0, m->nfinger);
     CARVE(sw_tswitch, m->nsw); CARVE(sw_nswitch, m->nsw); CARVE(sw_held, m->nsw);
     CARVE(act_piece, m->nu);
+    CARVE(state_undo, cd_state_body_size(m));
     CARVE(ev, d ? d->ev_cap : 0);
 #undef CARVE
     off = (off + 15) & ~(size_t)15;
@@ -148,12 +149,14 @@ cd_data *cd_data_create(const cd_model *m, int event_capacity, cd_error *err)
 
 void cd_data_set_control(cd_data *d, cd_control_fn fn, void *user)
 {
+    if (!d) return;
     d->control = fn;
     d->control_user = user;
 }
 
 void cd_data_set_user_switches(cd_data *d, cd_user_switch_fn g, cd_user_transition_fn tr, void *user)
 {
+    if (!d) return;
     d->user_switch = g;
     d->user_transition = tr;
     d->switch_user = user;
@@ -161,6 +164,10 @@ void cd_data_set_user_switches(cd_data *d, cd_user_switch_fn g, cd_user_transiti
 
 cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
 {
+    if (!m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_data_reset: %s is NULL", !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     int s, b, k;
     d->t = 0.0;
     memset(d->y, 0, (size_t)m->ny * sizeof(double));

@@ -11,6 +11,7 @@
 
 cd_status cd_forward(const cd_model *m, cd_data *d)
 {
+    if (!m || !d) return CD_EINVAL;
     int i, s, b;
     cd_status st = CD_OK;
     double *ysave = d->y;

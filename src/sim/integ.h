@@ -21,6 +21,12 @@ cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err);
 int cd_integ_state_size(const cd_model *m);
 void cd_integ_state_get(const cd_model *m, cd_data *d, double *buf);
 void cd_integ_state_set(const cd_model *m, cd_data *d, const double *buf);
+/* Doubles of the state after the header up to the integrator's part: t and
+ * the arrays (state.c); the size of cd_data's undo area. */
+size_t cd_state_body_size(const cd_model *m);
+/* 0 if the integrator's part of a state buffer is valid, else -1 and why
+ * (every word finite, flags 0 or 1, counts whole, h and tolerances >= 0). */
+int cd_integ_state_check(const cd_model *m, const double *buf, char *why, size_t len);
 
 /* dst takes what an evaluation needs of src's state (state.c; the sampler). */
 void cd_state_copy_eval(const cd_model *m, cd_data *dst, const cd_data *src);

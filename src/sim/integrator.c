@@ -749,6 +749,48 @@ static void seterr(cd_error *err, cd_status st, const char *msg, double t)
     snprintf(err->msg, sizeof err->msg, "%s at t = %.9g s", msg, t);
 }
 
+/* A numeric failure names its cause when it is a non-finite input (issue 24:
+ * a NaN in d->ctrl was reported as "non-finite state or singular mass
+ * matrix"): the first non-finite ctrl, qfrc_applied, xfrc_applied or
+ * xfrc_body element, with the actuator or body it belongs to. */
+static int nonfinite_input(const cd_model *m, const cd_data *d, char *buf, size_t len)
+{
+    int i;
+    const char *nm;
+    for (i = 0; i < m->nu; i++)
+        if (!isfinite(d->ctrl[i])) {
+            nm = m->act_name && m->act_name[i] && m->act_name[i][0] ? m->act_name[i] : NULL;
+            snprintf(buf, len, "d->ctrl[%d] (actuator %s%s%s) is %s", i, nm ? "'" : "", nm ? nm : "unnamed",
+                     nm ? "'" : "", isnan(d->ctrl[i]) ? "NaN" : "infinite");
+            return 1;
+        }
+    for (i = 0; i < m->nv; i++)
+        if (!isfinite(d->qfrc_applied[i])) {
+            snprintf(buf, len, "d->qfrc_applied[%d] is %s", i, isnan(d->qfrc_applied[i]) ? "NaN" : "infinite");
+            return 1;
+        }
+    for (i = 0; i < 6 * m->nbody; i++) {
+        const double *w = !isfinite(d->xfrc_applied[i]) ? d->xfrc_applied : !isfinite(d->xfrc_body[i]) ? d->xfrc_body : NULL;
+        if (!w) continue;
+        nm = m->body_name[i / 6] && m->body_name[i / 6][0] ? m->body_name[i / 6] : NULL;
+        snprintf(buf, len, "d->%s[%d] (body %d%s%s%s) is %s", w == d->xfrc_applied ? "xfrc_applied" : "xfrc_body", i,
+                 i / 6, nm ? " '" : ", unnamed", nm ? nm : "", nm ? "'" : "", isnan(w[i]) ? "NaN" : "infinite");
+        return 1;
+    }
+    return 0;
+}
+
+static void numeric_err(const cd_model *m, const cd_data *d, cd_error *err, cd_status st, const char *msg, double t)
+{
+    char in[300], both[400];
+    if (nonfinite_input(m, d, in, sizeof in)) {
+        snprintf(both, sizeof both, "non-finite input: %s", in);
+        seterr(err, st, both, t);
+    } else {
+        seterr(err, st, msg, t);
+    }
+}
+
 /* Start of a call: runtime options, and what the caller changed since the
  * last one. Returns 1 if the modes must be re-checked before stepping. */
 static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st, cd_error *err)
@@ -814,7 +856,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
          * ordinary step the end-of-step evaluation has already shown them consistent */
         if (need_settle) {
             st = settle_modes(m, d, I, &changed);
-            if (st != CD_OK) { seterr(err, st, "non-finite state or singular mass matrix", d->t); return st; }
+            if (st != CD_OK) { numeric_err(m, d, err, st, "non-finite state or singular mass matrix", d->t); return st; }
             need_settle = 0;
             if (changed) {
                 restart(d, I);
@@ -873,7 +915,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                 }
             }
             if (status == GSL_EBADFUNC) {
-                seterr(err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
+                numeric_err(m, d, err, CD_ENUMERIC, "right-hand side produced a non-finite value", t0);
                 return CD_ENUMERIC;
             }
             seterr(err, CD_ESTALL, "integrator step failed", t0);
@@ -898,7 +940,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         }
         if (st != CD_OK) {
             restore_start(m, d, I, t0, d->y);
-            seterr(err, CD_ENUMERIC, "non-finite state after a step", t0);
+            numeric_err(m, d, err, CD_ENUMERIC, "non-finite state after a step", t0);
             return CD_ENUMERIC;
         }
         I->fsal = 1;
@@ -965,6 +1007,10 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
 cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
                          cd_error *err)
 {
+    if (!m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_sim_advance: %s is NULL", !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     cd_integ *I = (cd_integ *)d->integ;
     int started;
     cd_status st = advance(m, d, t_end, cb, user, err, &started);
@@ -976,6 +1022,10 @@ cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
 
 cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 {
+    if (!m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_step: %s is NULL", !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     cd_integ *I = (cd_integ *)d->integ;
     double t_target, hsave = I->h;
     int started;
@@ -1025,6 +1075,41 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     b[13] = (double)I->auto_every; b[14] = (double)I->auto_since;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
+}
+
+/* cd_state_set's check of the integrator's part, before anything changes:
+ * 0, or -1 with why naming the first bad word. */
+int cd_integ_state_check(const cd_model *m, const double *b, char *why, size_t len)
+{
+    static const char *const fixed[INTEG_FIXED_WORDS] = {"step size h", "end time", "cd_step origin",
+                                                       "cd_step step", "cd_step step count", "end flag",
+                                                       "FSAL flag", "restart flag", "rtol", "atol",
+                                                       "auto stepper flag", "auto check agreements",
+                                                       "auto steps to the next check", "auto check interval",
+                                                       "auto steps since the last switch"};
+    int i, n = cd_integ_state_size(m);
+    for (i = 0; i < INTEG_FIXED_WORDS; i++) {
+        double v = b[i];
+        int ok = isfinite(v);
+        if (ok && (i == 0 || i == 3 || i >= 8)) ok = v >= 0; /* h, step, tolerances */
+        if (ok && i == 4) ok = v >= 0 && v <= 9007199254740992.0 && v == floor(v);
+        if (ok && ((i >= 5 && i <= 7) || i == 10)) ok = v == 0 || v == 1;
+        if (ok && i >= 11) ok = v >= 0 && v <= 9007199254740992.0 && v == floor(v);
+        if (!ok) {
+            snprintf(why, len, "the integrator's %s is %.17g (%s)", fixed[i], v,
+                     i == 4 || i >= 11 ? "expected a whole number >= 0" : (i >= 5 && i <= 7) || i == 10 ? "expected 0 or 1"
+                     : i == 1 || i == 2 ? "expected a finite number" : "expected a finite number >= 0");
+            return -1;
+        }
+    }
+    for (i = INTEG_FIXED_WORDS; i < n; i++)
+        if (!isfinite(b[i])) {
+            snprintf(why, len, "the integrator's %s value %d is %.17g (expected a finite number)",
+                     i < INTEG_FIXED_WORDS + m->ny ? "saved end state" : "saved input", i - INTEG_FIXED_WORDS -
+                     (i < INTEG_FIXED_WORDS + m->ny ? 0 : m->ny), b[i]);
+            return -1;
+        }
+    return 0;
 }
 
 void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)

@@ -29,6 +29,10 @@ struct cd_sampler {
 
 cd_sampler *cd_sampler_create(const cd_model *m, cd_error *err)
 {
+    if (!m) {
+        cd_error_set(err, CD_EINVAL, "cd_sampler_create: the model is NULL");
+        return NULL;
+    }
     cd_sampler *s = (cd_sampler *)calloc(1, sizeof *s);
     size_t n = (size_t)(m->ny ? m->ny : 1);
     if (!s) { cd_error_set(err, CD_ENOMEM, "sampler: out of memory"); return NULL; }
@@ -85,6 +89,10 @@ static double t_of(const cd_sampler *s, long k) { return s->t_first + (double)k 
 cd_status cd_sampler_begin(cd_sampler *s, const cd_model *m, const cd_data *d, double t_first, double dt,
                            cd_error *err)
 {
+    if (!s || !m || !d) {
+        cd_error_set(err, CD_EINVAL, "cd_sampler_begin: %s is NULL", !s ? "the sampler" : !m ? "the model" : "the data");
+        return CD_EINVAL;
+    }
     if (!(dt > 0) || !isfinite(dt) || !isfinite(t_first) || !isfinite(d->t)) {
         cd_error_set(err, CD_EINVAL, "sampler: expected a finite first time and dt > 0, got %g and %g", t_first, dt);
         return CD_EINVAL;
@@ -98,10 +106,11 @@ cd_status cd_sampler_begin(cd_sampler *s, const cd_model *m, const cd_data *d, d
     return CD_OK;
 }
 
-double cd_sampler_next(const cd_sampler *s) { return t_of(s, s->k); }
+double cd_sampler_next(const cd_sampler *s) { return s ? t_of(s, s->k) : NAN; }
 
 int cd_sampler_update(cd_sampler *s, const cd_model *m, const cd_data *d, cd_sample_fn fn, void *user)
 {
+    if (!s || !m || !d) return -1;
     cd_data *x = s->scratch;
     double tb = d->t, h = tb - s->ta;
     int i, r = 0;
