@@ -115,6 +115,9 @@ typedef struct {
     int equilibrium_start;/* 1: at reset, contacts closed at t = 0 (and engaged joint stops) start in
                              static equilibrium (normal penetration and stick anchors preloaded by a
                              quasi-static settle); 0 (default): they start with zero tangential deflection */
+    int broad_phase;      /* 1 (default): an evaluation skips the velocity work of open slots that are apart
+                             from their shape (x < 0) and computes their other outputs on demand (d->slot_far;
+                             results bit-identical); 0: every slot evaluated in full (docs/contact.md) */
 } cd_options;
 /* Which options may change after cd_data_create: every one except `stepper`
  * (the GSL objects are made for it) and `equilibrium_start` / `h_init` (used

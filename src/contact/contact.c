@@ -126,6 +126,91 @@ static void vpow(double r[3], const double a[3], double K, double p)
     cd_v3_scale(r, a, n > 0 ? K * pow(n, p - 1.0) : 0.0);
 }
 
+/* Geometry of slot k at the evaluated pose: the check point's centre pw,
+ * the penetration x, the normal n and the surface point s (world). An open
+ * slot beyond the shape's bounding sphere gets the sphere's gap (far_open).
+ * Returns 0, or -1 for a rejected query (x, n, s then unset). */
+static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, double pw[3], double *x, double n[3],
+                         double s[3])
+{
+    int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
+    double r = m->cp_radius[cp], dist;
+    cd_point_world(m, d, m->cp_body[cp], m->cp_pos + 3 * cp, pw, NULL);
+    if (open && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
+    else res = query_world(m, d, sh, pw, r, &dist, n, s);
+    if (res == 0) *x = r - dist;
+    return res;
+}
+
+/* The contact point c (middle of the overlap), the penetration rate xd and
+ * the tangential relative velocity vt of slot k from its geometry. */
+static void slot_rates(const cd_model *m, const cd_data *d, int k, double x, const double n[3], const double s[3],
+                       double c[3], double *xd, double vt[3])
+{
+    int ba = m->cp_body[m->slot_cp[k]], bb = m->shape_body[m->slot_shape[k]];
+    double va[3], vb[3], vrel[3], lb[3], t[3];
+    cd_v3_copy(c, s);
+    cd_v3_axpy(c, -0.5 * x, n);
+    /* velocity of each body's material point at c */
+    cd_v3_sub(t, c, d->body_c + 3 * ba);
+    cd_v3_cross(va, d->body_w + 3 * ba, t);
+    cd_v3_add(va, va, d->body_v + 3 * ba);
+    cd_v3_sub(lb, c, d->body_c + 3 * bb);
+    cd_v3_cross(vb, d->body_w + 3 * bb, lb);
+    cd_v3_add(vb, vb, d->body_v + 3 * bb);
+    cd_v3_sub(vrel, va, vb);
+    *xd = -cd_v3_dot(vrel, n);
+    tangential(vt, vrel, n);
+}
+
+/* Everything the full evaluation reports for an open slot, computed from
+ * d's evaluated kinematics (shape poses included) by the same operations:
+ * bit for bit what cd_contact_eval writes when it evaluates the slot. Used
+ * for the slots it skipped (d->slot_far). Returns 0, or -1 if the query is
+ * rejected (never for a skipped slot: it was accepted at the evaluation). */
+static int open_outputs(const cd_model *m, const cd_data *d, int k, double *x, double *xd, double *fraw, double c[3],
+                        double n[3], double vt[3])
+{
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double pw[3], s[3];
+    if (slot_geometry(m, d, k, 1, pw, x, n, s) != 0) return -1;
+    slot_rates(m, d, k, *x, n, s, c, xd, vt);
+    *fraw = L->K * sgnpow(*x, L->p) + L->D * sgnpow(*xd, L->q);
+    return 0;
+}
+
+void cd_contact_slot_outputs(const cd_model *m, const cd_data *d, int k, double *x, double *xdot, double *fnraw,
+                             double point[3], double normal[3], double vt[3])
+{
+    double lx, lxd, lf, lc[3], ln[3], lv[3];
+    if (d->slot_far[k] && open_outputs(m, d, k, &lx, &lxd, &lf, lc, ln, lv) == 0) {
+        if (x) *x = lx;
+        if (xdot) *xdot = lxd;
+        if (fnraw) *fnraw = lf;
+        if (point) cd_v3_copy(point, lc);
+        if (normal) cd_v3_copy(normal, ln);
+        if (vt) cd_v3_copy(vt, lv);
+        return;
+    }
+    if (x) *x = d->slot_x[k];
+    if (xdot) *xdot = d->slot_xdot[k];
+    if (fnraw) *fnraw = d->slot_fnraw[k];
+    if (point) cd_v3_copy(point, d->slot_point + 3 * k);
+    if (normal) cd_v3_copy(normal, d->slot_normal + 3 * k);
+    if (vt) cd_v3_copy(vt, d->slot_vt + 3 * k);
+}
+
+void cd_contact_complete(const cd_model *m, cd_data *d)
+{
+    int k;
+    for (k = 0; k < m->nslot; k++) {
+        if (!d->slot_far[k]) continue;
+        cd_contact_slot_outputs(m, d, k, d->slot_x + k, d->slot_xdot + k, d->slot_fnraw + k, d->slot_point + 3 * k,
+                                d->slot_normal + 3 * k, d->slot_vt + 3 * k);
+        d->slot_far[k] = 0;
+    }
+}
+
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
     int k;
@@ -134,13 +219,12 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
         int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
         const cd_contact_law *L = &m->law[m->slot_law[k]];
-        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3], c[3], va[3], vb[3], vrel[3], vt[3];
+        double pw[3], n[3], s[3], c[3], vt[3];
         double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
         double *z = d->y + m->ny_slot_adr + 3 * k;
-        cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
-        if (mode == CD_MODE_OPEN && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
-        else res = query_world(m, d, sh, pw, r, &dist, n, s);
+        res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, pw, &x, n, s);
         d->slot_geomfail[k] = (res < 0);
+        d->slot_far[k] = 0;
         zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
         if (res != 0) {
             /* a rejected geometry answer: no force, reported by the integrator */
@@ -155,22 +239,19 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
             cd_v3_zero(d->slot_normal + 3 * k);
             continue;
         }
-        x = r - dist;
-        cd_v3_copy(c, s);
-        cd_v3_axpy(c, -0.5 * x, n);
-        {
-            double lb[3], t[3];
-            /* velocity of each body's material point at c */
-            cd_v3_sub(t, c, d->body_c + 3 * ba);
-            cd_v3_cross(va, d->body_w + 3 * ba, t);
-            cd_v3_add(va, va, d->body_v + 3 * ba);
-            cd_v3_sub(lb, c, d->body_c + 3 * bb);
-            cd_v3_cross(vb, d->body_w + 3 * bb, lb);
-            cd_v3_add(vb, vb, d->body_v + 3 * bb);
+        if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
+            /* broad phase: an open slot apart from its shape (x < 0: its
+             * switching function -min(K x, f_raw) > 0, it cannot switch here)
+             * exerts no force and has no anchor rate; the rest of its outputs
+             * (rate, point, normal, slip velocity, f_raw) is computed only
+             * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
+            d->slot_far[k] = 1;
+            d->slot_x[k] = x;
+            d->slot_fn[k] = 0;
+            cd_v3_zero(d->slot_ft + 3 * k);
+            continue;
         }
-        cd_v3_sub(vrel, va, vb);
-        xd = -cd_v3_dot(vrel, n);
-        tangential(vt, vrel, n);
+        slot_rates(m, d, k, x, n, s, c, &xd, vt);
         /* eq. (3) */
         fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
         if (mode != CD_MODE_OPEN) {
@@ -251,6 +332,11 @@ void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, 
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double x = d->slot_x[k], f = d->slot_fnraw[k];
     int mode = d->slot_mode[k];
+    if (d->slot_far[k]) {
+        /* skipped by the broad phase: f_raw as the full evaluation gives it */
+        double xd, c[3], n[3], vt[3];
+        (void)open_outputs(m, d, k, &x, &xd, &f, c, n, vt);
+    }
     /* min(K x, f_raw): the penetration scaled to a force so that min() compares like with like */
     double gn = L->pull ? x * L->K : ((x * L->K) < f ? x * L->K : f);
     g[1] = 1.0;

@@ -79,6 +79,7 @@ cd_options cd_options_default(void)
     o.fd_eps = 1e-7;
     o.max_evals = 0;
     o.equilibrium_start = 0;
+    o.broad_phase = 1;
     return o;
 }
 
@@ -94,6 +95,10 @@ cd_status cd_options_check(const cd_options *o, cd_error *err)
         !(o->h_fixed > 0 && isfinite(o->h_fixed)) || o->max_steps < 1 || !(o->event_tol > 0) || !(o->dwell >= 0) ||
         !(o->v_reg > 0) || !(o->fd_eps > 0) || o->max_evals < 0 || (o->equilibrium_start != 0 && o->equilibrium_start != 1)) {
         seterr(err, CD_EINVAL, "integrator options out of range (steps, tolerances and budgets must be positive)");
+        return CD_EINVAL;
+    }
+    if (o->broad_phase != 0 && o->broad_phase != 1) {
+        seterr(err, CD_EINVAL, "option broad_phase must be 0 or 1, got %d", o->broad_phase);
         return CD_EINVAL;
     }
     return CD_OK;
