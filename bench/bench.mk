@@ -21,6 +21,14 @@ $(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h $(LIB_IO) $(LIB)
 	$(CC) $(CFLAGS_ALL) -D_DEFAULT_SOURCE -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lmujoco
 
+# every shipped scenario with its own settings; the broad phase on vs off
+# (bench/bench_scenarios.c, docs/performance.md "Every scenario")
+BENCH_SCEN = $(BUILD)/bench_scenarios
+$(BENCH_SCEN): bench/bench_scenarios.c $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
 bench-deps: deps
 	@bash scripts/install-bench-deps.sh
 

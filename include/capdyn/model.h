@@ -381,6 +381,12 @@ typedef struct cd_model {
 
     /* the slot table, fixed at finalize: one slot per (check point, shape) */
     int *slot_cp, *slot_shape, *slot_law;
+    /* slot groups of the broad phase, fixed at finalize: each a run of consecutive slots
+       with the same check-point body and shape (docs/contact.md, "Broad phase") */
+    int ngroup;
+    int *group_adr, *group_num;  /* (ngroup) first slot, number of slots */
+    double *group_pos;    /* (ngroup x 3) centre of the group's check points, body frame [m] */
+    double *group_radius; /* (ngroup) radius about it holding every check point's sphere [m] */
 
 } cd_model;
 

@@ -211,11 +211,67 @@ void cd_contact_complete(const cd_model *m, cd_data *d)
     }
 }
 
+/* Broad phase of group g (a run of slots of one check-point body against
+ * one shape, model.h): 1 if none of its check points can touch the shape,
+ * with *xb an upper bound of their penetrations. The group's sphere (centre
+ * cw, radius R holding every check point's sphere) is tested like one check
+ * point: against the shape's bounding sphere, then by the exact query (the
+ * signed distance is 1-Lipschitz, so x_k <= R - dist(cw)). A group of one
+ * check point is that check point: the same operations and decision as its
+ * slot's own (slot_geometry, then x < 0), so *xb is its x bit for bit; a
+ * larger group must be apart by more than CD_BROAD_MARGIN (round-off of
+ * the members' offsets). */
+static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
+{
+    int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
+    double cw[3], R = m->group_radius[g], dist, n[3], s[3];
+    cd_point_world(m, d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw, NULL);
+    if (far_open(m, d, sh, cw, R, &dist, n, s) == 1) {
+        *xb = R - dist;
+        return 1;
+    }
+    if (query_world(m, d, sh, cw, R, &dist, n, s) != 0) return 0;
+    *xb = R - dist;
+    return single ? *xb < 0 : *xb < -CD_BROAD_MARGIN;
+}
+
+/* An open slot skipped by the broad phase: no force, no anchor rate, x (or
+ * an upper bound of it, < 0) and the mark; the rest on demand. */
+static void skip_slot(cd_data *d, int k, double x, double *zdot)
+{
+    d->slot_far[k] = 1;
+    d->slot_geomfail[k] = 0;
+    d->slot_x[k] = x;
+    d->slot_fn[k] = 0;
+    cd_v3_zero(d->slot_ft + 3 * k);
+    zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
+}
+
+static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot);
+
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
-    int k;
+    int g, k;
     shape_poses(m, d);
-    for (k = 0; k < m->nslot; k++) {
+    for (g = 0; g < m->ngroup; g++) {
+        int k0 = m->group_adr[g], k1 = k0 + m->group_num[g];
+        double xb;
+        for (k = k0; k < k1 && d->slot_mode[k] != CD_MODE_OPEN; k++) {}
+        if (k < k1 && d->opt.broad_phase && group_apart(m, d, g, &xb)) {
+            /* the whole group is apart: its open slots are skipped before any per-slot work */
+            for (k = k0; k < k1; k++)
+                if (d->slot_mode[k] == CD_MODE_OPEN) skip_slot(d, k, xb, zdot);
+                else eval_slot(m, d, k, zdot);
+        } else {
+            for (k = k0; k < k1; k++) eval_slot(m, d, k, zdot);
+        }
+    }
+}
+
+/* One slot in full (or, open and apart: skipped after its geometry). */
+static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
+{
+    {
         int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
         int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
         const cd_contact_law *L = &m->law[m->slot_law[k]];
@@ -237,7 +293,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
             cd_v3_zero(d->slot_vt + 3 * k);
             cd_v3_copy(d->slot_point + 3 * k, pw);
             cd_v3_zero(d->slot_normal + 3 * k);
-            continue;
+            return;
         }
         if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
             /* broad phase: an open slot apart from its shape (x < 0: its
@@ -245,11 +301,8 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
              * exerts no force and has no anchor rate; the rest of its outputs
              * (rate, point, normal, slip velocity, f_raw) is computed only
              * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
-            d->slot_far[k] = 1;
-            d->slot_x[k] = x;
-            d->slot_fn[k] = 0;
-            cd_v3_zero(d->slot_ft + 3 * k);
-            continue;
+            skip_slot(d, k, x, zdot);
+            return;
         }
         slot_rates(m, d, k, x, n, s, c, &xd, vt);
         /* eq. (3) */
@@ -303,7 +356,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
         cd_v3_copy(d->slot_vt + 3 * k, vt);
         cd_v3_copy(d->slot_point + 3 * k, c);
         cd_v3_copy(d->slot_normal + 3 * k, n);
-        if (mode == CD_MODE_OPEN) continue;
+        if (mode == CD_MODE_OPEN) return;
         /* wrench on A about its system's reference point, reaction on B */
         cd_v3_scale(F + 3, n, fn);
         cd_v3_add(F + 3, F + 3, ft);
