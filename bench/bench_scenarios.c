@@ -7,8 +7,9 @@
  * samples: one call per output_dt; a step callback as the CLI's, which
  * changes nothing), without writing results. Printed per scenario: stepper,
  * duration, wall time (median and min over the repetitions), CPU time, the
- * real-time factor RTF = duration / median wall time, accepted steps,
- * rejected steps, right-hand-side evaluations, Jacobians (stats.njac),
+ * real-time factor RTF = duration / median wall time (and duration / median
+ * CPU time: on a shared machine the CPU time is what the run cost), accepted
+ * steps, right-hand-side evaluations, Jacobians (stats.njac),
  * events, and the run's status.
  *
  * --ab-broad-phase: for each scenario, the run with opt.broad_phase = 1 and
@@ -179,16 +180,17 @@ int main(int argc, char **argv)
         fprintf(stderr, "%s: need 1 <= reps <= %d and at least one scenario\n", argv[0], MAXREP);
         return 2;
     }
-    if (out && !(out_file = fopen(out, "a"))) { fprintf(stderr, "%s: cannot open %s\n", argv[0], out); return 1; }
+    if (out && !(out_file = fopen(out, "w"))) { fprintf(stderr, "%s: cannot open %s\n", argv[0], out); return 1; }
     strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", gmtime(&now));
     say("\n== %s: %s, %d repetition(s)%s, capdyn %s, %s", base_name(argv[0]),
         ab ? "broad phase on vs off (interleaved)" : "every scenario with its own settings", reps,
         ab ? "" : " (fewer for runs longer than the cap)", cd_version(), stamp);
     for (i = 0; i < nset; i++) say("%s--set %s", i ? " " : "\n   overrides: ", sets[i]);
-    say("\n   (library runs, no results written; wall = median [min] over the repetitions; RTF = duration / median wall)\n");
+    say("\n   (library runs, no results written; wall = median [min] over the repetitions; RTF = duration / median wall,"
+        " RTF cpu = duration / median CPU time)\n");
     if (!ab)
-        say("%-34s %-9s %7s %9s %9s %8s %8s %9s %9s %7s %7s %s\n", "scenario", "stepper", "dur [s]", "wall [s]",
-            "min [s]", "cpu [s]", "RTF", "steps", "rhs", "jac", "events", "status");
+        say("%-34s %-9s %7s %9s %9s %8s %8s %8s %9s %9s %7s %7s %s\n", "scenario", "stepper", "dur [s]", "wall [s]",
+            "min [s]", "cpu [s]", "RTF", "RTF cpu", "steps", "rhs", "jac", "events", "status");
     else
         say("%-30s %-9s %8s %8s %7s %7s %8s %8s %7s %7s %9s %7s %s\n", "scenario", "stepper", "wall on", "wall off",
             "x min", "x med", "cpu on", "cpu off", "x min", "x med", "rhs", "events", "identical");
@@ -218,9 +220,9 @@ int main(int argc, char **argv)
             }
         }
         if (!ab)
-            say("%-34s %-9s %7.3g %9.3f %9.3f %8.3f %8.3g %9ld %9ld %7ld %7ld %s%s%s\n", base_name(files[f]),
+            say("%-34s %-9s %7.3g %9.3f %9.3f %8.3f %8.3g %8.3g %9ld %9ld %7ld %7ld %s%s%s\n", base_name(files[f]),
                 cd_stepper_name(sc->model->opt.stepper), sc->duration, median(wall, n), minimum(wall, n), median(cpu, n),
-                sc->duration / median(wall, n), first.stats.nsteps, first.stats.nrhs, first.stats.njac,
+                sc->duration / median(wall, n), sc->duration / median(cpu, n), first.stats.nsteps, first.stats.nrhs, first.stats.njac,
                 first.stats.nevents, cd_status_string(first.st), first.st == CD_OK ? "" : ": ", first.msg);
         else
             say("%-30s %-9s %8.3f %8.3f %7.2f %7.2f %8.3f %8.3f %7.2f %7.2f %9ld %7ld %s\n", base_name(files[f]),
