@@ -47,7 +47,7 @@ bench: bench-deps
 	@mkdir -p bench/results
 	$(BENCH_BIN)
 	$(BENCH_SCEN) -r 1 --cap $(BENCH_SCEN_CAP) -o $(BENCH_DAY)-scenarios.txt scenarios/*.toml
-	$(BENCH_SCEN) --ab-broad-phase -r 3 --cap 120 -o $(BENCH_DAY)-broadphase.txt bench/capture_twin.toml scenarios/capture_handrail_tumbling.toml
+	$(BENCH_SCEN) --ab-broad-phase -r 3 --cap 120 -o $(BENCH_DAY)-broadphase.txt bench/capture_twin.toml scenarios/capture_handrail_tumbling.toml scenarios/capture_too_fast.toml
 	$(BENCH_TICKS) -o $(BENCH_DAY)-ticks.txt
 	CAPDYN_BENCH_SET='$(BENCH_STIFF)' $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) -o $(BENCH_RESULT)
 	CAPDYN_BENCH_SET= $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) --scenes-only -o $(BENCH_RESULT_AS_WRITTEN)
