@@ -271,102 +271,100 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 /* One slot in full (or, open and apart: skipped after its geometry). */
 static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
 {
-    {
-        int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
-        int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
-        const cd_contact_law *L = &m->law[m->slot_law[k]];
-        double pw[3], n[3], s[3], c[3], vt[3];
-        double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
-        double *z = d->y + m->ny_slot_adr + 3 * k;
-        res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, pw, &x, n, s);
-        d->slot_geomfail[k] = (res < 0);
-        d->slot_far[k] = 0;
-        zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
-        if (res != 0) {
-            /* a rejected geometry answer: no force, reported by the integrator */
-            x = 0.0;
-            d->slot_x[k] = x;
-            d->slot_xdot[k] = 0;
-            d->slot_fnraw[k] = 0.0;
-            d->slot_fn[k] = 0;
-            cd_v3_zero(d->slot_ft + 3 * k);
-            cd_v3_zero(d->slot_vt + 3 * k);
-            cd_v3_copy(d->slot_point + 3 * k, pw);
-            cd_v3_zero(d->slot_normal + 3 * k);
-            return;
-        }
-        if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
-            /* broad phase: an open slot apart from its shape (x < 0: its
-             * switching function -min(K x, f_raw) > 0, it cannot switch here)
-             * exerts no force and has no anchor rate; the rest of its outputs
-             * (rate, point, normal, slip velocity, f_raw) is computed only
-             * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
-            skip_slot(d, k, x, zdot);
-            return;
-        }
-        slot_rates(m, d, k, x, n, s, c, &xd, vt);
-        /* eq. (3) */
-        fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
-        if (mode != CD_MODE_OPEN) {
-            fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
-                          with `pull` it may be negative until x returns to 0 */
-            if (mode == CD_MODE_STICK) {
-                double zw[3], zt[3];
-                double fk[3], fd[3];
-                cd_m3_mulv(zw, d->body_R + 9 * bb, z);
-                tangential(zt, zw, n);
-                /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), signed vector powers */
-                vpow(fk, zt, L->Kt, L->pt);
-                vpow(fd, vt, L->Dt, L->qt);
-                cd_v3_add(ft, fk, fd);
-                cd_v3_scale(ft, ft, -1.0);
-                cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
-            } else {
-                double st[3], u[3], nu;
-                tangential(st, d->slot_dir + 3 * k, n);
-                cd_v3_normalize(st);
-                double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
-                double *va = d->slot_va + 3 * k, zrate;
-                /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
-                if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
-                else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
-                cd_v3_copy(va, vt);
-                cd_v3_axpy(va, -zrate, st);
-                cd_v3_copy(u, va);
-                cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
-                nu = cd_v3_norm(u);
-                /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
-                if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
-            }
-        }
-        if (d->slot_held[k] && mode != CD_MODE_OPEN) {
-            /* switches suspended by the chattering guard (at most `dwell`):
-             * keep the no-pull rule and the friction cone by clipping */
-            double nft;
-            if (fn < 0 && !L->pull) fn = 0;
-            nft = cd_v3_norm(ft);
-            if (fn < 0) { cd_v3_zero(ft); nft = 0; }
-            if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
-        }
+    int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
+    int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double pw[3], n[3], s[3], c[3], vt[3];
+    double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
+    double *z = d->y + m->ny_slot_adr + 3 * k;
+    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, pw, &x, n, s);
+    d->slot_geomfail[k] = (res < 0);
+    d->slot_far[k] = 0;
+    zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
+    if (res != 0) {
+        /* a rejected geometry answer: no force, reported by the integrator */
+        x = 0.0;
         d->slot_x[k] = x;
-        d->slot_xdot[k] = xd;
-        d->slot_fnraw[k] = fraw;
-        d->slot_fn[k] = fn;
-        cd_v3_copy(d->slot_ft + 3 * k, ft);
-        cd_v3_copy(d->slot_vt + 3 * k, vt);
-        cd_v3_copy(d->slot_point + 3 * k, c);
-        cd_v3_copy(d->slot_normal + 3 * k, n);
-        if (mode == CD_MODE_OPEN) return;
-        /* wrench on A about its system's reference point, reaction on B */
-        cd_v3_scale(F + 3, n, fn);
-        cd_v3_add(F + 3, F + 3, ft);
-        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[ba]);
-        cd_v3_cross(F, arm, F + 3);
-        for (res = 0; res < 6; res++) d->body_fext[6 * ba + res] += F[res];
-        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[bb]);
-        cd_v3_cross(F, arm, F + 3);
-        for (res = 0; res < 6; res++) d->body_fext[6 * bb + res] -= F[res];
+        d->slot_xdot[k] = 0;
+        d->slot_fnraw[k] = 0.0;
+        d->slot_fn[k] = 0;
+        cd_v3_zero(d->slot_ft + 3 * k);
+        cd_v3_zero(d->slot_vt + 3 * k);
+        cd_v3_copy(d->slot_point + 3 * k, pw);
+        cd_v3_zero(d->slot_normal + 3 * k);
+        return;
     }
+    if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
+        /* broad phase: an open slot apart from its shape (x < 0: its
+         * switching function -min(K x, f_raw) > 0, it cannot switch here)
+         * exerts no force and has no anchor rate; the rest of its outputs
+         * (rate, point, normal, slip velocity, f_raw) is computed only
+         * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
+        skip_slot(d, k, x, zdot);
+        return;
+    }
+    slot_rates(m, d, k, x, n, s, c, &xd, vt);
+    /* eq. (3) */
+    fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
+    if (mode != CD_MODE_OPEN) {
+        fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
+                      with `pull` it may be negative until x returns to 0 */
+        if (mode == CD_MODE_STICK) {
+            double zw[3], zt[3];
+            double fk[3], fd[3];
+            cd_m3_mulv(zw, d->body_R + 9 * bb, z);
+            tangential(zt, zw, n);
+            /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), signed vector powers */
+            vpow(fk, zt, L->Kt, L->pt);
+            vpow(fd, vt, L->Dt, L->qt);
+            cd_v3_add(ft, fk, fd);
+            cd_v3_scale(ft, ft, -1.0);
+            cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
+        } else {
+            double st[3], u[3], nu;
+            tangential(st, d->slot_dir + 3 * k, n);
+            cd_v3_normalize(st);
+            double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
+            double *va = d->slot_va + 3 * k, zrate;
+            /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
+            if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
+            else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
+            cd_v3_copy(va, vt);
+            cd_v3_axpy(va, -zrate, st);
+            cd_v3_copy(u, va);
+            cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
+            nu = cd_v3_norm(u);
+            /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
+            if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
+        }
+    }
+    if (d->slot_held[k] && mode != CD_MODE_OPEN) {
+        /* switches suspended by the chattering guard (at most `dwell`):
+         * keep the no-pull rule and the friction cone by clipping */
+        double nft;
+        if (fn < 0 && !L->pull) fn = 0;
+        nft = cd_v3_norm(ft);
+        if (fn < 0) { cd_v3_zero(ft); nft = 0; }
+        if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
+    }
+    d->slot_x[k] = x;
+    d->slot_xdot[k] = xd;
+    d->slot_fnraw[k] = fraw;
+    d->slot_fn[k] = fn;
+    cd_v3_copy(d->slot_ft + 3 * k, ft);
+    cd_v3_copy(d->slot_vt + 3 * k, vt);
+    cd_v3_copy(d->slot_point + 3 * k, c);
+    cd_v3_copy(d->slot_normal + 3 * k, n);
+    if (mode == CD_MODE_OPEN) return;
+    /* wrench on A about its system's reference point, reaction on B */
+    cd_v3_scale(F + 3, n, fn);
+    cd_v3_add(F + 3, F + 3, ft);
+    cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[ba]);
+    cd_v3_cross(F, arm, F + 3);
+    for (res = 0; res < 6; res++) d->body_fext[6 * ba + res] += F[res];
+    cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[bb]);
+    cd_v3_cross(F, arm, F + 3);
+    for (res = 0; res < 6; res++) d->body_fext[6 * bb + res] -= F[res];
 }
 
 /* Switching functions of slot k after cd_contact_eval, signed so that a
