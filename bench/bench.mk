@@ -21,17 +21,39 @@ $(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h $(LIB_IO) $(LIB)
 	$(CC) $(CFLAGS_ALL) -D_DEFAULT_SOURCE -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lmujoco
 
+# every shipped scenario with its own settings; the broad phase on vs off
+# (bench/bench_scenarios.c, docs/performance.md "Every scenario")
+BENCH_SCEN = $(BUILD)/bench_scenarios
+$(BENCH_SCEN): bench/bench_scenarios.c $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
+# tick times of a control loop per stepper (bench/bench_ticks.c; it counts
+# heap allocations by interposing malloc, so it is linked without sanitizers)
+BENCH_TICKS = $(BUILD)/bench_ticks
+$(BENCH_TICKS): bench/bench_ticks.c examples/control_loop_model.h $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
 bench-deps: deps
 	@bash scripts/install-bench-deps.sh
 
+BENCH_DAY = bench/results/$(shell date -u +%Y-%m-%d)
+BENCH_SCEN_CAP ?= 30
 bench: bench-deps
-	@$(MAKE) --no-print-directory $(BENCH_BIN) $(BENCH_SPEED) $(CLI)
-	$(BENCH_BIN)
-	@bash bench/bench_scenarios.sh
+	@$(MAKE) --no-print-directory $(BENCH_BIN) $(BENCH_SPEED) $(BENCH_SCEN) $(BENCH_TICKS) $(CLI)
 	@mkdir -p bench/results
+	$(BENCH_BIN)
+	$(BENCH_SCEN) -r 1 --cap $(BENCH_SCEN_CAP) -o $(BENCH_DAY)-scenarios.txt scenarios/*.toml
+	$(BENCH_SCEN) --ab-broad-phase -r 3 --cap 120 -o $(BENCH_DAY)-broadphase.txt bench/capture_twin.toml scenarios/capture_handrail_tumbling.toml scenarios/capture_too_fast.toml
+	$(BENCH_TICKS) -o $(BENCH_DAY)-ticks.txt
 	CAPDYN_BENCH_SET='$(BENCH_STIFF)' $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) -o $(BENCH_RESULT)
 	CAPDYN_BENCH_SET= $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) --scenes-only -o $(BENCH_RESULT_AS_WRITTEN)
-	@echo "results: $(BENCH_RESULT) (capdyn with ros34pw2), $(BENCH_RESULT_AS_WRITTEN) (the scenarios' own rk8pd)"
+	@echo "results: $(BENCH_DAY)-scenarios.txt (every scenario), $(BENCH_DAY)-broadphase.txt (broad phase on/off),"
+	@echo "         $(BENCH_DAY)-ticks.txt (control-loop ticks), $(BENCH_RESULT) (vs MuJoCo, capdyn with ros34pw2),"
+	@echo "         $(BENCH_RESULT_AS_WRITTEN) (vs MuJoCo, the scenarios' own rk8pd)"
 
 .PHONY: bench-deps
 

@@ -191,6 +191,12 @@ typedef struct cd_data {
     double *shape_R;      /* (nshape x 9) shape -> world rotation at the last evaluation (once per shape) */
     double *shape_xw;     /* (nshape x 3) shape origin, world [m] */
     int *slot_geomfail;   /* (nslot) 1 if the last geometry query was rejected */
+    int *slot_far;        /* (nslot) 1 if the last evaluation's broad phase skipped the slot (open and
+                             apart; opt.broad_phase): slot_fn = 0 and slot_ft = 0 are current, slot_x
+                             is x or (a skipped group of several check points) an upper bound of it,
+                             < 0; slot_xdot, slot_fnraw, slot_point, slot_normal, slot_vt are not
+                             updated: cd_contact_slot_outputs gives every output as the full
+                             evaluation would, cd_contact_complete fills them in */
     int *slot_held;       /* (nslot) 1 while the chattering guard suspends the slot's switches
                              (= sw_held): its forces are then clipped to f_n >= 0 and |f_t| <= mu_max f_n */
 

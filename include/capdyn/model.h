@@ -136,6 +136,9 @@ typedef struct {
     int equilibrium_start;/* 1: at reset, contacts closed at t = 0 (and engaged joint stops) start in
                              static equilibrium (normal penetration and stick anchors preloaded by a
                              quasi-static settle); 0 (default): they start with zero tangential deflection */
+    int broad_phase;      /* 1 (default): an evaluation skips the velocity work of open slots that are apart
+                             from their shape (x < 0) and computes their other outputs on demand (d->slot_far;
+                             results bit-identical); 0: every slot evaluated in full (docs/contact.md) */
 } cd_options;
 /* Which options may change after cd_data_create: every one except `stepper`
  * (the GSL objects are made for it) and `equilibrium_start` / `h_init` (used
@@ -399,6 +402,12 @@ typedef struct cd_model {
 
     /* the slot table, fixed at finalize: one slot per (check point, shape) */
     int *slot_cp, *slot_shape, *slot_law;
+    /* slot groups of the broad phase, fixed at finalize: each a run of consecutive slots
+       with the same check-point body and shape (docs/contact.md, "Broad phase") */
+    int ngroup;
+    int *group_adr, *group_num;  /* (ngroup) first slot, number of slots */
+    double *group_pos;    /* (ngroup x 3) centre of the group's check points, body frame [m] */
+    double *group_radius; /* (ngroup) radius about it holding every check point's sphere [m] */
 
 } cd_model;
 

@@ -60,6 +60,17 @@ double cd_potential_energy(const cd_model *m, const cd_data *d, int s);
  * body_fext, not to tau). */
 cd_status cd_forward(const cd_model *m, cd_data *d);
 
+/* Outputs of slot k at d's last evaluation as the full evaluation gives
+ * them, also for a slot the broad phase skipped (d->slot_far[k]: computed
+ * here from d's kinematics, bit for bit what evaluating it would have
+ * written). Any output pointer may be NULL. No allocation. */
+void cd_contact_slot_outputs(const cd_model *m, const cd_data *d, int k, double *x, double *xdot, double *fnraw,
+                             double point[3], double normal[3], double vt[3]);
+/* Fills in the outputs of every slot the last evaluation skipped (and
+ * clears d->slot_far): afterwards every slot_* array holds the full
+ * evaluation's values. */
+void cd_contact_complete(const cd_model *m, cd_data *d);
+
 /* ---- contact geometry (exposed for tests and tools) ------------------------- */
 /* Signed distance from a point (shape frame) to a shape of a finalized model
  * (>0 outside), outward unit normal and closest surface point (shape frame):

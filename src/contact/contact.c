@@ -128,113 +128,245 @@ static void vpow(double r[3], const double a[3], double K, double p)
     cd_v3_scale(r, a, n > 0 ? K * pow(n, p - 1.0) : 0.0);
 }
 
-void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
+/* Geometry of slot k at the evaluated pose: the check point's centre pw,
+ * the penetration x, the normal n and the surface point s (world). An open
+ * slot beyond the shape's bounding sphere gets the sphere's gap (far_open).
+ * Returns 0, or -1 for a rejected query (x, n, s then unset). */
+static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, double pw[3], double *x, double n[3],
+                         double s[3])
+{
+    int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
+    double r = m->cp_radius[cp], dist;
+    cd_point_world(m, d, m->cp_body[cp], m->cp_pos + 3 * cp, pw, NULL);
+    if (open && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
+    else res = query_world(m, d, sh, pw, r, &dist, n, s);
+    if (res == 0) *x = r - dist;
+    return res;
+}
+
+/* The contact point c (middle of the overlap), the penetration rate xd and
+ * the tangential relative velocity vt of slot k from its geometry. */
+static void slot_rates(const cd_model *m, const cd_data *d, int k, double x, const double n[3], const double s[3],
+                       double c[3], double *xd, double vt[3])
+{
+    int ba = m->cp_body[m->slot_cp[k]], bb = m->shape_body[m->slot_shape[k]];
+    double va[3], vb[3], vrel[3], lb[3], t[3];
+    cd_v3_copy(c, s);
+    cd_v3_axpy(c, -0.5 * x, n);
+    /* velocity of each body's material point at c */
+    cd_v3_sub(t, c, d->body_c + 3 * ba);
+    cd_v3_cross(va, d->body_w + 3 * ba, t);
+    cd_v3_add(va, va, d->body_v + 3 * ba);
+    cd_v3_sub(lb, c, d->body_c + 3 * bb);
+    cd_v3_cross(vb, d->body_w + 3 * bb, lb);
+    cd_v3_add(vb, vb, d->body_v + 3 * bb);
+    cd_v3_sub(vrel, va, vb);
+    *xd = -cd_v3_dot(vrel, n);
+    tangential(vt, vrel, n);
+}
+
+/* Everything the full evaluation reports for an open slot, computed from
+ * d's evaluated kinematics (shape poses included) by the same operations:
+ * bit for bit what cd_contact_eval writes when it evaluates the slot. Used
+ * for the slots it skipped (d->slot_far). Returns 0, or -1 if the query is
+ * rejected (never for a skipped slot: it was accepted at the evaluation). */
+static int open_outputs(const cd_model *m, const cd_data *d, int k, double *x, double *xd, double *fraw, double c[3],
+                        double n[3], double vt[3])
+{
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double pw[3], s[3];
+    if (slot_geometry(m, d, k, 1, pw, x, n, s) != 0) return -1;
+    slot_rates(m, d, k, *x, n, s, c, xd, vt);
+    *fraw = L->K * sgnpow(*x, L->p) + L->D * sgnpow(*xd, L->q);
+    return 0;
+}
+
+void cd_contact_slot_outputs(const cd_model *m, const cd_data *d, int k, double *x, double *xdot, double *fnraw,
+                             double point[3], double normal[3], double vt[3])
+{
+    double lx, lxd, lf, lc[3], ln[3], lv[3];
+    if (d->slot_far[k] && open_outputs(m, d, k, &lx, &lxd, &lf, lc, ln, lv) == 0) {
+        if (x) *x = lx;
+        if (xdot) *xdot = lxd;
+        if (fnraw) *fnraw = lf;
+        if (point) cd_v3_copy(point, lc);
+        if (normal) cd_v3_copy(normal, ln);
+        if (vt) cd_v3_copy(vt, lv);
+        return;
+    }
+    if (x) *x = d->slot_x[k];
+    if (xdot) *xdot = d->slot_xdot[k];
+    if (fnraw) *fnraw = d->slot_fnraw[k];
+    if (point) cd_v3_copy(point, d->slot_point + 3 * k);
+    if (normal) cd_v3_copy(normal, d->slot_normal + 3 * k);
+    if (vt) cd_v3_copy(vt, d->slot_vt + 3 * k);
+}
+
+void cd_contact_complete(const cd_model *m, cd_data *d)
 {
     int k;
-    shape_poses(m, d);
     for (k = 0; k < m->nslot; k++) {
-        int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
-        int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
-        const cd_contact_law *L = &m->law[m->slot_law[k]];
-        double r = m->cp_radius[cp], pw[3], dist, n[3], s[3] = {0, 0, 0}, c[3], va[3], vb[3], vrel[3], vt[3];
-        double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
-        double *z = d->y + m->ny_slot_adr + 3 * k;
-        cd_point_world(m, d, ba, m->cp_pos + 3 * cp, pw, NULL);
-        if (mode == CD_MODE_OPEN && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
-        else res = query_world(m, d, sh, pw, r, &dist, n, s);
-        d->slot_geomfail[k] = (res < 0);
-        zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
-        if (res != 0) {
-            /* a rejected geometry answer: no force, reported by the integrator */
-            x = 0.0;
-            d->slot_x[k] = x;
-            d->slot_xdot[k] = 0;
-            d->slot_fnraw[k] = 0.0;
-            d->slot_fn[k] = 0;
-            cd_v3_zero(d->slot_ft + 3 * k);
-            cd_v3_zero(d->slot_vt + 3 * k);
-            cd_v3_copy(d->slot_point + 3 * k, pw);
-            cd_v3_zero(d->slot_normal + 3 * k);
-            continue;
-        }
-        x = r - dist;
-        cd_v3_copy(c, s);
-        cd_v3_axpy(c, -0.5 * x, n);
-        {
-            double lb[3], t[3];
-            /* velocity of each body's material point at c */
-            cd_v3_sub(t, c, d->body_c + 3 * ba);
-            cd_v3_cross(va, d->body_w + 3 * ba, t);
-            cd_v3_add(va, va, d->body_v + 3 * ba);
-            cd_v3_sub(lb, c, d->body_c + 3 * bb);
-            cd_v3_cross(vb, d->body_w + 3 * bb, lb);
-            cd_v3_add(vb, vb, d->body_v + 3 * bb);
-        }
-        cd_v3_sub(vrel, va, vb);
-        xd = -cd_v3_dot(vrel, n);
-        tangential(vt, vrel, n);
-        /* eq. (3) */
-        fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
-        if (mode != CD_MODE_OPEN) {
-            fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
-                          with `pull` it may be negative until x returns to 0 */
-            if (mode == CD_MODE_STICK) {
-                double zw[3], zt[3];
-                double fk[3], fd[3];
-                cd_m3_mulv(zw, d->body_R + 9 * bb, z);
-                tangential(zt, zw, n);
-                /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), signed vector powers */
-                vpow(fk, zt, L->Kt, L->pt);
-                vpow(fd, vt, L->Dt, L->qt);
-                cd_v3_add(ft, fk, fd);
-                cd_v3_scale(ft, ft, -1.0);
-                cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
-            } else {
-                double st[3], u[3], nu;
-                tangential(st, d->slot_dir + 3 * k, n);
-                cd_v3_normalize(st);
-                double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
-                double *va = d->slot_va + 3 * k, zrate;
-                /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
-                if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
-                else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
-                cd_v3_copy(va, vt);
-                cd_v3_axpy(va, -zrate, st);
-                cd_v3_copy(u, va);
-                cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
-                nu = cd_v3_norm(u);
-                /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
-                if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
-            }
-        }
-        if (d->slot_held[k] && mode != CD_MODE_OPEN) {
-            /* switches suspended by the chattering guard (at most `dwell`):
-             * keep the no-pull rule and the friction cone by clipping */
-            double nft;
-            if (fn < 0 && !L->pull) fn = 0;
-            nft = cd_v3_norm(ft);
-            if (fn < 0) { cd_v3_zero(ft); nft = 0; }
-            if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
-        }
-        d->slot_x[k] = x;
-        d->slot_xdot[k] = xd;
-        d->slot_fnraw[k] = fraw;
-        d->slot_fn[k] = fn;
-        cd_v3_copy(d->slot_ft + 3 * k, ft);
-        cd_v3_copy(d->slot_vt + 3 * k, vt);
-        cd_v3_copy(d->slot_point + 3 * k, c);
-        cd_v3_copy(d->slot_normal + 3 * k, n);
-        if (mode == CD_MODE_OPEN) continue;
-        /* wrench on A about its system's reference point, reaction on B */
-        cd_v3_scale(F + 3, n, fn);
-        cd_v3_add(F + 3, F + 3, ft);
-        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[ba]);
-        cd_v3_cross(F, arm, F + 3);
-        for (res = 0; res < 6; res++) d->body_fext[6 * ba + res] += F[res];
-        cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[bb]);
-        cd_v3_cross(F, arm, F + 3);
-        for (res = 0; res < 6; res++) d->body_fext[6 * bb + res] -= F[res];
+        if (!d->slot_far[k]) continue;
+        cd_contact_slot_outputs(m, d, k, d->slot_x + k, d->slot_xdot + k, d->slot_fnraw + k, d->slot_point + 3 * k,
+                                d->slot_normal + 3 * k, d->slot_vt + 3 * k);
+        d->slot_far[k] = 0;
     }
+}
+
+/* Broad phase of group g (a run of slots of one check-point body against
+ * one shape, model.h): 1 if none of its check points can touch the shape,
+ * with *xb an upper bound of their penetrations. The group's sphere (centre
+ * cw, radius R holding every check point's sphere) is tested like one check
+ * point: against the shape's bounding sphere, then by the exact query (the
+ * signed distance is 1-Lipschitz, so x_k <= R - dist(cw)). A group of one
+ * check point is that check point: the same operations and decision as its
+ * slot's own (slot_geometry, then x < 0), so *xb is its x bit for bit; a
+ * larger group must be apart by more than CD_BROAD_MARGIN (round-off of
+ * the members' offsets). */
+static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
+{
+    int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
+    double cw[3], R = m->group_radius[g], dist, n[3], s[3];
+    cd_point_world(m, d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw, NULL);
+    if (far_open(m, d, sh, cw, R, &dist, n, s) == 1) {
+        *xb = R - dist;
+        return 1;
+    }
+    if (query_world(m, d, sh, cw, R, &dist, n, s) != 0) return 0;
+    *xb = R - dist;
+    return single ? *xb < 0 : *xb < -CD_BROAD_MARGIN;
+}
+
+/* An open slot skipped by the broad phase: no force, no anchor rate, x (or
+ * an upper bound of it, < 0) and the mark; the rest on demand. */
+static void skip_slot(cd_data *d, int k, double x, double *zdot)
+{
+    d->slot_far[k] = 1;
+    d->slot_geomfail[k] = 0;
+    d->slot_x[k] = x;
+    d->slot_fn[k] = 0;
+    cd_v3_zero(d->slot_ft + 3 * k);
+    zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
+}
+
+static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot);
+
+void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
+{
+    int g, k;
+    shape_poses(m, d);
+    for (g = 0; g < m->ngroup; g++) {
+        int k0 = m->group_adr[g], k1 = k0 + m->group_num[g];
+        double xb;
+        for (k = k0; k < k1 && d->slot_mode[k] != CD_MODE_OPEN; k++) {}
+        if (k < k1 && d->opt.broad_phase && group_apart(m, d, g, &xb)) {
+            /* the whole group is apart: its open slots are skipped before any per-slot work */
+            for (k = k0; k < k1; k++)
+                if (d->slot_mode[k] == CD_MODE_OPEN) skip_slot(d, k, xb, zdot);
+                else eval_slot(m, d, k, zdot);
+        } else {
+            for (k = k0; k < k1; k++) eval_slot(m, d, k, zdot);
+        }
+    }
+}
+
+/* One slot in full (or, open and apart: skipped after its geometry). */
+static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
+{
+    int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
+    int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double pw[3], n[3], s[3], c[3], vt[3];
+    double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
+    double *z = d->y + m->ny_slot_adr + 3 * k;
+    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, pw, &x, n, s);
+    d->slot_geomfail[k] = (res < 0);
+    d->slot_far[k] = 0;
+    zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
+    if (res != 0) {
+        /* a rejected geometry answer: no force, reported by the integrator */
+        x = 0.0;
+        d->slot_x[k] = x;
+        d->slot_xdot[k] = 0;
+        d->slot_fnraw[k] = 0.0;
+        d->slot_fn[k] = 0;
+        cd_v3_zero(d->slot_ft + 3 * k);
+        cd_v3_zero(d->slot_vt + 3 * k);
+        cd_v3_copy(d->slot_point + 3 * k, pw);
+        cd_v3_zero(d->slot_normal + 3 * k);
+        return;
+    }
+    if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
+        /* broad phase: an open slot apart from its shape (x < 0: its
+         * switching function -min(K x, f_raw) > 0, it cannot switch here)
+         * exerts no force and has no anchor rate; the rest of its outputs
+         * (rate, point, normal, slip velocity, f_raw) is computed only
+         * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
+        skip_slot(d, k, x, zdot);
+        return;
+    }
+    slot_rates(m, d, k, x, n, s, c, &xd, vt);
+    /* eq. (3) */
+    fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
+    if (mode != CD_MODE_OPEN) {
+        fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
+                      with `pull` it may be negative until x returns to 0 */
+        if (mode == CD_MODE_STICK) {
+            double zw[3], zt[3];
+            double fk[3], fd[3];
+            cd_m3_mulv(zw, d->body_R + 9 * bb, z);
+            tangential(zt, zw, n);
+            /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), signed vector powers */
+            vpow(fk, zt, L->Kt, L->pt);
+            vpow(fd, vt, L->Dt, L->qt);
+            cd_v3_add(ft, fk, fd);
+            cd_v3_scale(ft, ft, -1.0);
+            cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, vt);
+        } else {
+            double st[3], u[3], nu;
+            tangential(st, d->slot_dir + 3 * k, n);
+            cd_v3_normalize(st);
+            double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
+            double *va = d->slot_va + 3 * k, zrate;
+            /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
+            if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
+            else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
+            cd_v3_copy(va, vt);
+            cd_v3_axpy(va, -zrate, st);
+            cd_v3_copy(u, va);
+            cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
+            nu = cd_v3_norm(u);
+            /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
+            if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
+        }
+    }
+    if (d->slot_held[k] && mode != CD_MODE_OPEN) {
+        /* switches suspended by the chattering guard (at most `dwell`):
+         * keep the no-pull rule and the friction cone by clipping */
+        double nft;
+        if (fn < 0 && !L->pull) fn = 0;
+        nft = cd_v3_norm(ft);
+        if (fn < 0) { cd_v3_zero(ft); nft = 0; }
+        if (nft > L->mu_s * fn) cd_v3_scale(ft, ft, nft > 0 ? L->mu_s * fn / nft : 0.0);
+    }
+    d->slot_x[k] = x;
+    d->slot_xdot[k] = xd;
+    d->slot_fnraw[k] = fraw;
+    d->slot_fn[k] = fn;
+    cd_v3_copy(d->slot_ft + 3 * k, ft);
+    cd_v3_copy(d->slot_vt + 3 * k, vt);
+    cd_v3_copy(d->slot_point + 3 * k, c);
+    cd_v3_copy(d->slot_normal + 3 * k, n);
+    if (mode == CD_MODE_OPEN) return;
+    /* wrench on A about its system's reference point, reaction on B */
+    cd_v3_scale(F + 3, n, fn);
+    cd_v3_add(F + 3, F + 3, ft);
+    cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[ba]);
+    cd_v3_cross(F, arm, F + 3);
+    for (res = 0; res < 6; res++) d->body_fext[6 * ba + res] += F[res];
+    cd_v3_sub(arm, c, d->sys_ref + 3 * m->body_sys[bb]);
+    cd_v3_cross(F, arm, F + 3);
+    for (res = 0; res < 6; res++) d->body_fext[6 * bb + res] -= F[res];
 }
 
 /* Switching functions of slot k after cd_contact_eval, signed so that a
@@ -253,6 +385,11 @@ void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, 
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double x = d->slot_x[k], f = d->slot_fnraw[k];
     int mode = d->slot_mode[k];
+    if (d->slot_far[k]) {
+        /* skipped by the broad phase: f_raw as the full evaluation gives it */
+        double xd, c[3], n[3], vt[3];
+        (void)open_outputs(m, d, k, &x, &xd, &f, c, n, vt);
+    }
     /* min(K x, f_raw): the penetration scaled to a force so that min() compares like with like */
     double gn = L->pull ? x * L->K : ((x * L->K) < f ? x * L->K : f);
     g[1] = 1.0;

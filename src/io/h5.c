@@ -1634,6 +1634,12 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
         memcpy(row_f64(w, w->s[CD_SER_POINT]), d->slot_point, n3);
         memcpy(row_f64(w, w->s[CD_SER_NORMAL]), d->slot_normal, n3);
         memcpy(row_f64(w, w->s[CD_SER_SLIP_VELOCITY]), d->slot_vt, n3);
+        for (k = 0; k < m->nslot; k++) /* slots the broad phase skipped: their full outputs */
+            if (d->slot_far[k])
+                cd_contact_slot_outputs(m, d, k, row_f64(w, w->s[CD_SER_PENETRATION]) + k,
+                                        row_f64(w, w->s[CD_SER_PENETRATION_RATE]) + k, NULL,
+                                        row_f64(w, w->s[CD_SER_POINT]) + 3 * k, row_f64(w, w->s[CD_SER_NORMAL]) + 3 * k,
+                                        row_f64(w, w->s[CD_SER_SLIP_VELOCITY]) + 3 * k);
         for (k = 0; k < m->nslot; k++) mo[k] = (signed char)d->slot_mode[k];
     }
     {

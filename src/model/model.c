@@ -80,6 +80,7 @@ cd_options cd_options_default(void)
     o.max_evals = 0;
     o.jacobian = CD_JAC_MODEL;
     o.equilibrium_start = 0;
+    o.broad_phase = 1;
     return o;
 }
 
@@ -109,6 +110,10 @@ cd_status cd_options_check(const cd_options *o, cd_error *err)
     }
     if (o->jacobian != CD_JAC_MODEL && o->jacobian != CD_JAC_FD) {
         seterr(err, CD_EINVAL, "options: jacobian must be CD_JAC_MODEL (0) or CD_JAC_FD (1), got %d", o->jacobian);
+        return CD_EINVAL;
+    }
+    if (o->broad_phase != 0 && o->broad_phase != 1) {
+        seterr(err, CD_EINVAL, "option broad_phase must be 0 or 1, got %d", o->broad_phase);
         return CD_EINVAL;
     }
     return CD_OK;
@@ -237,6 +242,7 @@ void cd_model_free(cd_model *m)
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert); free(m->shape_rbound);
     free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
     free(m->law); free(m->pair_sys); free(m->pair_body); free(m->pair_shape); free(m->pair_law);
+    free(m->group_adr); free(m->group_num); free(m->group_pos); free(m->group_radius);
     free(m->slot_cp); free(m->slot_shape); free(m->slot_law);
     free(m);
 }
@@ -1320,6 +1326,61 @@ out:
     return st;
 }
 
+/* The broad phase's slot groups (docs/contact.md): runs of consecutive
+ * slots with the same check-point body and shape, each with a sphere about
+ * the middle of its check points' box holding every check point's sphere
+ * (a single check point: its own centre and radius, exactly). */
+static cd_status build_groups(cd_model *m)
+{
+    int k, g, n = 0;
+    free(m->group_adr); free(m->group_num); free(m->group_pos); free(m->group_radius);
+    m->group_adr = m->group_num = NULL;
+    m->group_pos = m->group_radius = NULL;
+    m->ngroup = 0;
+    for (k = 0; k < m->nslot; k++)
+        if (k == 0 || m->slot_shape[k] != m->slot_shape[k - 1] ||
+            m->cp_body[m->slot_cp[k]] != m->cp_body[m->slot_cp[k - 1]])
+            n++;
+    m->group_adr = malloc((size_t)(n ? n : 1) * sizeof(int));
+    m->group_num = malloc((size_t)(n ? n : 1) * sizeof(int));
+    m->group_pos = malloc((size_t)(n ? n : 1) * 3 * sizeof(double));
+    m->group_radius = malloc((size_t)(n ? n : 1) * sizeof(double));
+    if (!m->group_adr || !m->group_num || !m->group_pos || !m->group_radius) return CD_ENOMEM;
+    for (g = -1, k = 0; k < m->nslot; k++) {
+        if (k == 0 || m->slot_shape[k] != m->slot_shape[k - 1] ||
+            m->cp_body[m->slot_cp[k]] != m->cp_body[m->slot_cp[k - 1]]) {
+            m->group_adr[++g] = k;
+            m->group_num[g] = 0;
+        }
+        m->group_num[g]++;
+    }
+    m->ngroup = n;
+    for (g = 0; g < n; g++) {
+        double lo[3], hi[3], *c = m->group_pos + 3 * g, R = 0;
+        int i, j;
+        for (i = 0; i < 3; i++) lo[i] = hi[i] = m->cp_pos[3 * m->slot_cp[m->group_adr[g]] + i];
+        for (j = 1; j < m->group_num[g]; j++)
+            for (i = 0; i < 3; i++) {
+                double p = m->cp_pos[3 * m->slot_cp[m->group_adr[g] + j] + i];
+                if (p < lo[i]) lo[i] = p;
+                if (p > hi[i]) hi[i] = p;
+            }
+        for (i = 0; i < 3; i++) c[i] = 0.5 * (lo[i] + hi[i]);
+        for (j = 0; j < m->group_num[g]; j++) {
+            int cp = m->slot_cp[m->group_adr[g] + j];
+            const double *p = m->cp_pos + 3 * cp;
+            double e[3], r;
+            for (i = 0; i < 3; i++) e[i] = p[i] - c[i];
+            r = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) + m->cp_radius[cp];
+            if (r > R) R = r;
+        }
+        /* round-off of the distances above: a group sphere never smaller than
+         * a member's (a single member: exactly its radius) */
+        m->group_radius[g] = m->group_num[g] == 1 ? m->cp_radius[m->slot_cp[m->group_adr[g]]] : R * (1.0 + 1e-12);
+    }
+    return CD_OK;
+}
+
 cd_status cd_model_finalize(cd_model *m, cd_error *err)
 {
     if (!m) {
@@ -1356,6 +1417,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
         if (sst != CD_OK) return sst;
     }
     nslot = m->nslot;
+    if (build_groups(m) != CD_OK) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
     /* hull faces of the convex shapes */
     m->shape_face_adr = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));
     m->shape_face_num = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof(int));

@@ -65,7 +65,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(slot_mode, ns); CARVE(slot_dir, 3 * ns); CARVE(slot_x, ns);
     CARVE(slot_xdot, ns); CARVE(slot_fn, ns); CARVE(slot_ft, 3 * ns); CARVE(slot_point, 3 * ns);
     CARVE(slot_normal, 3 * ns); CARVE(slot_vt, 3 * ns); CARVE(slot_va, 3 * ns); CARVE(slot_fnraw, ns);
-    CARVE(slot_geomfail, ns);
+    CARVE(slot_geomfail, ns); CARVE(slot_far, ns);
     CARVE(shape_R, 9 * m->nshape); CARVE(shape_xw, 3 * m->nshape);
     CARVE(lim_mode, m->nlim); CARVE(lim_depth, m->nlim); CARVE(lim_force, m->nlim); CARVE(lim_raw, m->nlim);
     CARVE(fric_mode, m->nfric); CARVE(fric_dir, m->nfric); CARVE(fric_force, m->nfric);
