@@ -379,6 +379,7 @@ long sw_region(const sw_plan *p, const sw_result *res, double length, double *ar
 typedef struct {
     const sw_opts *o;
     const sw_plan *p;
+    sw_out *out;    /* the summary (rank 0 / the parent only) */
 } sw_ctx;
 
 static void run_variant(const sw_ctx *cx, long idx, sw_result *r)
@@ -777,7 +778,10 @@ static int run_local(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int 
         cli_error("out of memory");
         return -1;
     }
-    for (j = 0; j < nj; j++) wk[j].pid = -1;
+    for (j = 0; j < nj; j++) { /* no process, no variant: stop_worker and the clean-up below skip it */
+        wk[j].pid = -1;
+        wk[j].busy = -1;
+    }
     for (;;) {
         /* hand out work: one variant per idle worker */
         for (j = 0; j < nj && !g_stop; j++) {
@@ -839,7 +843,7 @@ static int run_local(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int 
         }
         draw(pg, *ndone, *nfail, 0);
         if (cli_wall() - last_ckpt >= SW_CHECKPOINT) {
-            if (sw_summary_write(cx->o->output, meta, p, res, nj, cli_wall() - wall0, msg, sizeof msg) != 0)
+            if (sw_summary_write(cx->out, meta, p, res, nj, cli_wall() - wall0, msg, sizeof msg) != 0)
                 cli_error("%s", msg);
             last_ckpt = cli_wall();
         }
@@ -927,7 +931,7 @@ static int run_mpi(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int si
         }
         draw(pg, *ndone, *nfail, 0);
         if (cli_wall() - last_ckpt >= SW_CHECKPOINT) {
-            if (sw_summary_write(cx->o->output, meta, p, res, size, cli_wall() - wall0, msg, sizeof msg) != 0)
+            if (sw_summary_write(cx->out, meta, p, res, size, cli_wall() - wall0, msg, sizeof msg) != 0)
                 cli_error("%s", msg);
             last_ckpt = cli_wall();
         }
@@ -946,6 +950,7 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     sw_plan p;
     sw_meta meta;
     sw_ctx cx;
+    sw_out out;
     sw_result *res = NULL;
     sw_progress pg;
     cd_scenario *sc = NULL;
@@ -958,8 +963,11 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     struct sigaction sa, old_int, old_term, old_pipe;
 
     memset(&p, 0, sizeof p);
+    memset(&out, 0, sizeof out);
+    out.lock_fd = -1;
     cx.o = &o;
     cx.p = &p;
+    cx.out = &out;
     /* every rank parses the same command line and makes the same plan; only
      * rank 0 says what is wrong with it */
     {
@@ -1043,6 +1051,21 @@ static int sweep_main(int argc, char **argv, int rank, int size)
         exitc = CLI_FAIL;
         goto out;
     }
+    /* SIGXFSZ (file size limit, ulimit -f) would kill the sweep in the middle
+     * of a write and leave its temporary file: ignored, the write fails
+     * with EFBIG and is reported (workers inherit this, as capdyn run) */
+    signal(SIGXFSZ, SIG_IGN);
+    /* the summary: never the scenario, a file another process writes or a
+     * non-regular file (checked again, under a lock, at every write) */
+    {
+        const char *in[1];
+        in[0] = o.scenario;
+        if (sw_out_open(&out, o.output, in, 1, msg, sizeof msg) != 0) {
+            cli_error("%s", msg);
+            exitc = CLI_FAIL;
+            goto out;
+        }
+    }
     {
         const char **ov = malloc(sizeof(char *) * (size_t)(o.nsets + p.nkey + 1));
         char **own = calloc((size_t)p.nkey + 1, sizeof(char *));
@@ -1098,7 +1121,7 @@ static int sweep_main(int argc, char **argv, int rank, int size)
         goto out;
     }
     /* the summary is written once before any work: an unwritable -o fails now */
-    if (sw_summary_write(o.output, &meta, &p, res, 0, 0, msg, sizeof msg) != 0) {
+    if (sw_summary_write(&out, &meta, &p, res, 0, 0, msg, sizeof msg) != 0) {
         cli_error("%s", msg);
         exitc = CLI_FAIL;
         goto out;
@@ -1145,7 +1168,7 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     sigaction(SIGTERM, &old_term, NULL);
     sigaction(SIGPIPE, &old_pipe, NULL);
 
-    if (sw_summary_write(o.output, &meta, &p, res, nj, wall, msg, sizeof msg) != 0) {
+    if (sw_summary_write(&out, &meta, &p, res, nj, wall, msg, sizeof msg) != 0) {
         cli_error("%s", msg);
         exitc = CLI_FAIL;
         goto out;
@@ -1198,6 +1221,7 @@ out:
     fflush(stdout);
     free(res);
     free(overrides);
+    sw_out_close(&out);
     cd_scenario_free(sc);
     free_plan(&p);
     free(o.sets);

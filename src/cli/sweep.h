@@ -67,9 +67,28 @@ typedef struct {
 
 void sw_result_blank(sw_result *r, long index);
 
-/* Writes the summary to path (a temporary file in its directory, renamed
- * onto path). jobs and total_wall go to /timing. 0 or -1 with msg. */
-int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
+/* The summary's place on disk, held for the whole sweep (docs/reliability.md,
+ * "Sweeps"): the same protocol as a results file of capdyn run (src/io/h5.c,
+ * claim_output): the target is never an input file (same device and inode)
+ * nor anything but a regular file; a file another capdyn process writes is
+ * flock'ed by it and refused; each write goes to a temporary file in the
+ * target's directory, flock'ed, renamed onto the target under a lock on the
+ * directory, and keeps its lock (so capdyn run -o, or a second sweep with
+ * the same -o, refuses the summary while this sweep runs). */
+typedef struct {
+    char *path;               /* as given */
+    char *target;             /* the file replaced (a symbolic link followed) */
+    int lock_fd;              /* our flock'ed summary, -1 before the first write */
+} sw_out;
+
+/* Checks path as the summary of a sweep whose inputs are the ninput files
+ * input (the scenario); 0, or -1 with msg (out is then empty). */
+int sw_out_open(sw_out *out, const char *path, const char *const *input, int ninput, char *msg, size_t len);
+void sw_out_close(sw_out *out);
+
+/* Writes the summary to out (a temporary file in its directory, renamed
+ * onto it). jobs and total_wall go to /timing. 0 or -1 with msg. */
+int sw_summary_write(sw_out *out, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
                      double total_wall, char *msg, size_t len);
 /* Reads the results of a summary written for the same sweep into res
  * (nvar entries, blanked first); -1 with msg if it cannot be read or was

@@ -7,15 +7,21 @@
  * the variants' results alone, so that the same sweep gives the same
  * summary for any -j or number of MPI ranks; wall times are in /timing
  * only. Objects are created without time stamps. */
+#define _DEFAULT_SOURCE /* flock */
 #define _POSIX_C_SOURCE 200809L
 #include "sweep.h"
 #include "capdyn/model.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <hdf5.h>
+#include <libgen.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #define SW_FORMAT "capdyn-sweep"
@@ -153,7 +159,7 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
     double *num = malloc(sizeof(double) * (size_t)(n * p->nkey + 1));
     hid_t g;
     if (!dbuf || !lbuf || !num) {
-        rc = -1;
+        rc = -2; /* out of memory */
         goto out;
     }
     for (i = 0; i < n; i++) {
@@ -180,7 +186,7 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
     specs = malloc(sizeof *specs * (size_t)p->nkey);
     reasons = malloc(sizeof *reasons * (size_t)(n + 1));
     if (!names || !specs || !reasons) {
-        rc = -1;
+        rc = -2;
         goto out;
     }
     for (k = 0; k < p->nkey; k++) {
@@ -260,23 +266,135 @@ out:
     return rc;
 }
 
-int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
-                     double total_wall, char *msg, size_t len)
+/* ---- where the summary goes ------------------------------------------------ */
+
+static int same_file(const struct stat *a, const struct stat *b) { return a->st_dev == b->st_dev && a->st_ino == b->st_ino; }
+
+int sw_out_open(sw_out *out, const char *path, const char *const *input, int ninput, char *msg, size_t len)
 {
-    size_t n = strlen(path);
-    char *tmp = malloc(n + 64);
-    const char *slash = strrchr(path, '/');
-    hid_t fapl, fcpl, f;
-    int rc;
-    if (!tmp) {
+    struct stat st, si;
+    int i;
+    out->path = out->target = NULL;
+    out->lock_fd = -1;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        out->target = realpath(path, NULL);
+        if (!out->target) {
+            snprintf(msg, len, "cannot write the sweep summary '%s': it is a symbolic link to a missing file", path);
+            return -1;
+        }
+    } else if ((out->target = malloc(strlen(path) + 1)) != NULL)
+        strcpy(out->target, path);
+    out->path = malloc(strlen(path) + 1);
+    if (!out->target || !out->path) {
+        sw_out_close(out);
         snprintf(msg, len, "out of memory");
         return -1;
     }
-    /* .NAME.tmp-PID in the target's directory */
-    if (slash)
-        sprintf(tmp, "%.*s/.%s.tmp-%ld", (int)(slash - path), path, slash + 1, (long)getpid());
-    else
-        sprintf(tmp, ".%s.tmp-%ld", path, (long)getpid());
+    strcpy(out->path, path);
+    if (stat(out->target, &st) != 0) return 0; /* a new file */
+    if (S_ISDIR(st.st_mode)) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': it is a directory", path);
+        goto fail;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': it exists and is not a regular file", path);
+        goto fail;
+    }
+    for (i = 0; i < ninput; i++)
+        if (input[i] && stat(input[i], &si) == 0 && same_file(&si, &st)) {
+            snprintf(msg, len, "cannot write the sweep summary to '%s': it is the scenario file '%s' (choose another -o)",
+                     path, input[i]);
+            goto fail;
+        }
+    return 0;
+fail:
+    sw_out_close(out);
+    return -1;
+}
+
+void sw_out_close(sw_out *out)
+{
+    if (out->lock_fd >= 0) close(out->lock_fd);
+    out->lock_fd = -1;
+    free(out->path);
+    free(out->target);
+    out->path = out->target = NULL;
+}
+
+/* The temporary file of the next write, created and flock'ed in the
+ * target's directory (dir_fd locked by the caller); checks that the target
+ * is still ours or free. Returns its descriptor, -1 with msg. */
+static int claim_tmp(sw_out *out, char *tmp, size_t tlen, char *msg, size_t len)
+{
+    struct stat st, mine;
+    const char *slash = strrchr(out->target, '/');
+    int fd = -1, i;
+    if (stat(out->target, &st) == 0) {
+        if (!S_ISREG(st.st_mode)) {
+            snprintf(msg, len, "cannot write the sweep summary '%s': it exists and is not a regular file", out->path);
+            return -1;
+        }
+        if (out->lock_fd < 0 || fstat(out->lock_fd, &mine) != 0 || !same_file(&mine, &st)) {
+            int probe = open(out->target, O_RDONLY | O_NOCTTY | O_CLOEXEC);
+            if (probe >= 0) {
+                int busy = flock(probe, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+                close(probe);
+                if (busy) {
+                    snprintf(msg, len,
+                             "cannot write the sweep summary '%s': another capdyn process is writing it (the file is "
+                             "locked); choose another -o or wait for it to end",
+                             out->path);
+                    return -1;
+                }
+            }
+        }
+    }
+    for (i = 0; i < 100; i++) {
+        if (slash)
+            snprintf(tmp, tlen, "%.*s/.%s.tmp-%ld-%d", (int)(slash - out->target), out->target, slash + 1,
+                     (long)getpid(), i);
+        else
+            snprintf(tmp, tlen, ".%s.tmp-%ld-%d", out->target, (long)getpid(), i);
+        fd = open(tmp, O_RDWR | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0666);
+        if (fd >= 0 || errno != EEXIST) break;
+    }
+    if (fd < 0) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': creating a temporary file in its directory: %s",
+                 out->path, strerror(errno));
+        return -1;
+    }
+    (void)flock(fd, LOCK_EX | LOCK_NB);
+    return fd;
+}
+
+int sw_summary_write(sw_out *out, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
+                     double total_wall, char *msg, size_t len)
+{
+    size_t n = strlen(out->target);
+    char *tmp = malloc(n + 64), *dcopy = malloc(n + 1);
+    hid_t fapl, fcpl, f;
+    int rc, dir_fd, fd;
+    if (!tmp || !dcopy) {
+        free(tmp);
+        free(dcopy);
+        snprintf(msg, len, "writing the sweep summary '%s': out of memory", out->path);
+        return -1;
+    }
+    strcpy(dcopy, out->target);
+    dir_fd = open(dirname(dcopy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    free(dcopy);
+    if (dir_fd < 0) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': %s", out->path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    (void)flock(dir_fd, LOCK_EX); /* best effort: not every file system has it */
+    fd = claim_tmp(out, tmp, n + 64, msg, len);
+    if (fd < 0) {
+        close(dir_fd);
+        free(tmp);
+        return -1;
+    }
     fapl = H5Pcreate(H5P_FILE_ACCESS);
     fcpl = H5Pcreate(H5P_FILE_CREATE);
     H5Pset_file_locking(fapl, 0, 1);
@@ -285,26 +403,37 @@ int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, co
     H5Pclose(fapl);
     H5Pclose(fcpl);
     if (f < 0) {
-        snprintf(msg, len, "cannot create the sweep summary '%s' (temporary '%s')", path, tmp);
-        free(tmp);
-        return -1;
+        snprintf(msg, len, "cannot create the sweep summary '%s' (temporary '%s')", out->path, tmp);
+        rc = -1;
+        goto out;
     }
     H5E_BEGIN_TRY { rc = write_body(f, meta, p, res, jobs, total_wall); } H5E_END_TRY;
-    if (H5Fclose(f) < 0) rc = -1;
+    H5E_BEGIN_TRY { /* a failed flush (disk full) prints pages of diagnostics otherwise */
+        if (H5Fclose(f) < 0 && rc == 0) rc = -1;
+    } H5E_END_TRY;
+    if (rc == -2)
+        snprintf(msg, len, "writing the sweep summary '%s': out of memory; '%s' is left as it was", out->path,
+                 out->path);
+    else if (rc != 0)
+        snprintf(msg, len,
+                 "writing the sweep summary '%s' failed (disk full, quota, file size limit or I/O error); '%s' is "
+                 "left as it was",
+                 out->path, out->path);
+    else if (rename(tmp, out->target) != 0) {
+        snprintf(msg, len, "cannot rename '%s' onto the sweep summary '%s': %s", tmp, out->path, strerror(errno));
+        rc = -1;
+    }
+out:
     if (rc != 0) {
-        snprintf(msg, len, "writing the sweep summary '%s' failed (temporary '%s' removed)", path, tmp);
         unlink(tmp);
-        free(tmp);
-        return -1;
+        close(fd);
+    } else { /* the new summary is ours, the old one is gone */
+        if (out->lock_fd >= 0) close(out->lock_fd);
+        out->lock_fd = fd;
     }
-    if (rename(tmp, path) != 0) {
-        snprintf(msg, len, "cannot rename '%s' onto the sweep summary '%s'", tmp, path);
-        unlink(tmp);
-        free(tmp);
-        return -1;
-    }
+    close(dir_fd);
     free(tmp);
-    return 0;
+    return rc == 0 ? 0 : -1;
 }
 
 /* ---- reading -------------------------------------------------------------- */
