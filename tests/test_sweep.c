@@ -590,3 +590,49 @@ Test(sweep, mpirun_two_ranks_gives_the_serial_summary, .timeout = 300)
     H5Fclose(f);
     rm_rf(dir);
 }
+
+Test(sweep, resume_of_a_finished_sweep_changes_nothing, .timeout = 120)
+{
+    /* issue 24: --resume on a complete summary used to mark variant 0 not
+     * run (status -1, complete 0) and exit 0. Now: exit 0, "3 of 3 variants
+     * run", and the summary equal to the one before (all but /timing). */
+    char dir[256], sc[512], s[512], before[512], *out = NULL, *err = NULL, *bytes;
+    hid_t f;
+    long i;
+    FILE *fp;
+    struct stat st;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s, sizeof s, "%s/s.h5", dir);
+    snprintf(before, sizeof before, "%s/before.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, "--vary", "target.object.mass=0.3,0.4,0.5", "-q", "-o", s,
+                        NULL),
+                 0, "%s", err);
+    free(err);
+    cr_assert_eq(stat(s, &st), 0);
+    bytes = malloc((size_t)st.st_size);
+    fp = fopen(s, "rb");
+    cr_assert(bytes && fp && fread(bytes, 1, (size_t)st.st_size, fp) == (size_t)st.st_size);
+    fclose(fp);
+    fp = fopen(before, "wb");
+    cr_assert(fp && fwrite(bytes, 1, (size_t)st.st_size, fp) == (size_t)st.st_size);
+    fclose(fp);
+    free(bytes);
+    for (i = 0; i < 2; i++) { /* twice, with one and with two workers */
+        cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary", "target.object.mass=0.3,0.4,0.5", "-j",
+                            i ? "2" : "1", "--resume", "-o", s, NULL),
+                     0, "%s", err);
+        cr_assert(strstr(out, "3 of 3 variants run (0 failed), 0 in"), "%s", out);
+        free(out);
+        free(err);
+    }
+    f = open_ro(s);
+    cr_assert(f >= 0);
+    cr_assert_eq(attr_ll(f, "complete"), 1);
+    cr_assert_eq(attr_ll(f, "n_run"), 3);
+    for (i = 0; i < 3; i++) cr_assert_eq(ds_ll(f, "status", i), 0, "variant %ld", i);
+    H5Fclose(f);
+    same_summary(before, s);
+    same_summary(s, before);
+    rm_rf(dir);
+}
