@@ -208,23 +208,26 @@ static int parse_vary(sw_key *k, const char *arg, int lhs, char *msg, size_t len
             return -1;
         }
         k->is_range = 1;
-        k->n = c2 ? n : 0;
-        if (!lhs) {
-            long i;
-            char buf[64];
-            k->vals = malloc(sizeof(char *) * (size_t)n);
-            if (!k->vals) return -1;
-            for (i = 0; i < n; i++) {
-                /* weights of both ends: exact at both, symmetric about the middle */
-                double v = n == 1 ? k->a : i == n - 1 ? k->b
-                                                      : (k->a * (double)(n - 1 - i) + k->b * (double)i) / (double)(n - 1);
-                fmt_grid(buf, sizeof buf, v, n > 1 ? (k->b - k->a) / (double)(n - 1) : 0);
-                if (!(k->vals[k->nval++] = dup_str(buf, strlen(buf)))) return -1;
-            }
-        }
+        k->n = c2 ? n : 0; /* its values are made once the grid's size is known (grid_values) */
         return 0;
     }
     return split_list(k, k->spec, msg, len);
+}
+
+/* The n values of a range key of a grid. 0, or -1 (out of memory). */
+static int grid_values(sw_key *k)
+{
+    long i, n = k->n;
+    char buf[64];
+    k->vals = malloc(sizeof(char *) * (size_t)n);
+    if (!k->vals) return -1;
+    for (i = 0; i < n; i++) {
+        /* weights of both ends: exact at both, symmetric about the middle */
+        double v = n == 1 ? k->a : i == n - 1 ? k->b : (k->a * (double)(n - 1 - i) + k->b * (double)i) / (double)(n - 1);
+        fmt_grid(buf, sizeof buf, v, n > 1 ? (k->b - k->a) / (double)(n - 1) : 0);
+        if (!(k->vals[k->nval++] = dup_str(buf, strlen(buf)))) return -1;
+    }
+    return 0;
 }
 
 /* splitmix64: the hypercube's random numbers, the same on every machine */
@@ -246,13 +249,17 @@ static int make_plan(sw_plan *p, char *msg, size_t len)
     int k;
     char buf[64];
     if (!p->lhs) {
+        /* the size first: no key's values are made for a grid too large */
         double nv = 1;
-        for (k = 0; k < p->nkey; k++) nv *= (double)p->key[k].nval;
+        for (k = 0; k < p->nkey; k++) nv *= (double)(p->key[k].is_range ? p->key[k].n : p->key[k].nval);
         if (nv > (double)SW_MAX_VARIANTS) {
-            snprintf(msg, len, "the grid has %.0f variants, more than %ld", nv, SW_MAX_VARIANTS);
+            char b[CLI_NUM];
+            snprintf(msg, len, "the grid has %s variants, more than %ld", cli_fmt_num(b, nv), SW_MAX_VARIANTS);
             return -1;
         }
         p->nvar = (long)nv;
+        for (k = 0; k < p->nkey; k++)
+            if (p->key[k].is_range && grid_values(&p->key[k]) != 0) return -1;
     } else
         p->nvar = p->lhs_n;
     p->val = calloc((size_t)(p->nvar * p->nkey + 1), sizeof(char *));
@@ -991,11 +998,7 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     }
     if (o.table) {
         free(o.sets);
-        if (sw_summary_table(o.table, stdout, msg, sizeof msg) != 0) {
-            cli_error("%s", msg);
-            return CLI_FAIL;
-        }
-        return fflush(stdout) == 0 ? CLI_OK : CLI_FAIL;
+        return sw_summary_table(o.table);
     }
     if (!o.output) {
         const char *b = strrchr(o.scenario, '/');
@@ -1104,8 +1107,7 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     meta.until_verdict = o.until_verdict;
     for (i = 0; i < p.nvar; i++) sw_result_blank(&res[i], i);
     if (o.resume) {
-        if (sw_summary_read(o.output, &meta, &p, res, msg, sizeof msg) != 0) {
-            cli_error("%s", msg);
+        if (sw_summary_resume(o.output, &meta, &p, res) != 0) {
             exitc = CLI_FAIL;
             goto out;
         }

@@ -90,12 +90,40 @@ void sw_out_close(sw_out *out);
  * onto it). jobs and total_wall go to /timing. 0 or -1 with msg. */
 int sw_summary_write(sw_out *out, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
                      double total_wall, char *msg, size_t len);
-/* Reads the results of a summary written for the same sweep into res
- * (nvar entries, blanked first); -1 with msg if it cannot be read or was
- * made by another sweep (msg names what differs). */
-int sw_summary_read(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res, char *msg, size_t len);
-/* Prints a summary as columns for gnuplot (capdyn sweep --table). */
-int sw_summary_table(const char *path, FILE *out, char *msg, size_t len);
+/* A summary file as read back (everything but the units): what --table
+ * prints and --resume continues. Strings and arrays owned (sw_summary_free). */
+typedef struct {
+    long long version;        /* format_version */
+    char *capdyn_version, *scenario, *scenario_text, *overrides, *design;
+    long long lhs_samples, seed, nvar, nrun, nfail, complete, until_verdict;
+    double length;            /* [m] 0: none */
+    int nkey;
+    char **names, **specs;    /* nkey */
+    char **vals;              /* nvar x nkey TOML values */
+    double *num;              /* nvar x nkey, NaN where not a number */
+    sw_result *res;           /* nvar (wall from /timing) */
+    long nslice;              /* region slices (0: no /region) */
+    char **slice;
+    double *area;
+    long long *captured;
+    long long jobs;
+    double total_wall;
+} sw_summary;
+
+/* Reads a summary (every size checked against the file before anything is
+ * allocated; the checksums of format_version 2 verified). Run it in a child
+ * process (cli_isolated): HDF5 may crash on a damaged file. 0, or -1 with
+ * msg naming path and what is wrong (s is then freed). */
+int sw_summary_load(const char *path, sw_summary *s, char *msg, size_t len);
+void sw_summary_free(sw_summary *s);
+/* The results of a summary made by the same sweep (meta, p) into res (nvar
+ * entries), read in a child process with a time limit; 0, or -1 after one
+ * error line (the file is damaged, or was made by another sweep: the
+ * message names what differs). */
+int sw_summary_resume(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res);
+/* capdyn sweep --table: prints a summary as columns for gnuplot on stdout,
+ * read in a child process with a time limit; an exit status. */
+int sw_summary_table(const char *path);
 
 /* Normalised region areas of a grid over at least two numeric ranges (the
  * first two are the plane): for each combination of the other keys' values,
