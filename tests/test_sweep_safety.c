@@ -220,3 +220,170 @@ Test(sweep_safety, a_file_size_limit_ends_the_sweep_with_one_line_and_no_tempora
     cr_expect_eq(hidden_files(dir), 0, "no temporary file left");
     rm_rf(dir);
 }
+
+/* Runs capdyn (args NULL-ended) in dir with extra environment entries; the
+ * exit status (128 + signal). ASan (make asan) must not turn a crash in the
+ * reading child into an exit status or a report on stderr. */
+static int capdyn_envv(const char *dir, char **out, char **err, const char *tmo, char *const *args)
+{
+    char opt[700], t[64], *env[3], *argv[32], p[700];
+    int n = 0, st;
+    snprintf(opt, sizeof opt,
+             "ASAN_OPTIONS=handle_segv=0:handle_sigbus=0:handle_abort=0:handle_sigfpe=0:detect_leaks=0:"
+             "abort_on_error=1:log_path=%s/asan",
+             dir);
+    snprintf(t, sizeof t, "CAPDYN_READ_TIMEOUT=%s", tmo);
+    env[0] = opt;
+    env[1] = t;
+    env[2] = NULL;
+    argv[n++] = (char *)bin();
+    while (*args && n < 31) argv[n++] = *args++;
+    argv[n] = NULL;
+    st = wait_status(spawn(dir, argv, env));
+    snprintf(p, sizeof p, "%s/out.txt", dir);
+    if (out) *out = slurp(p);
+    snprintf(p, sizeof p, "%s/err.txt", dir);
+    if (err) *err = slurp(p);
+    return st;
+}
+
+Test(sweep_safety, damaged_summaries_give_one_line_and_exit_1, .timeout = 120)
+{
+    /* tests/bad_inputs/summaries: a 2-variant summary with one bit flipped
+     * (a value: the checksum; n_variants: 2^30 + 2, refused before any
+     * allocation; the format name; the superblock; one that crashes HDF5
+     * 1.10 (SIGSEGV) and one that makes it loop, both contained in the
+     * reading child) and one cut in half. sweep --table on each: exit 1,
+     * nothing on stdout, one error line (no HDF5 diagnostics) containing
+     * NN_name.expected if that is not empty. The looping one takes the time
+     * limit (1 s here). --resume on a copy of each refuses it the same way
+     * and leaves it byte for byte. */
+    char bdir[600], tdir[64], sc[600];
+    DIR *d;
+    struct dirent *e;
+    int ncase = 0;
+    snprintf(bdir, sizeof bdir, "%s/tests/bad_inputs/summaries", root());
+    scen(sc, sizeof sc, "tako_centred.toml");
+    make_tmpdir(tdir, sizeof tdir);
+    d = opendir(bdir);
+    cr_assert_not_null(d, "%s", bdir);
+    while ((e = readdir(d)) != NULL) {
+        char name[256], path[1200], cp[1200], *want, *out, *err, *before, *after;
+        char *tab[4], *res[20];
+        size_t l = strlen(e->d_name);
+        int rc, n = 0;
+        double t0;
+        if (l < 4 || strcmp(e->d_name + l - 3, ".h5")) continue;
+        snprintf(name, sizeof name, "%.*s", (int)(l - 3), e->d_name);
+        snprintf(path, sizeof path, "%s/%s.expected", bdir, name);
+        want = slurp(path);
+        cr_assert_not_null(want, "%s.expected", name);
+        if (*want) want[strlen(want) - 1] = 0;
+        snprintf(path, sizeof path, "%s/%s", bdir, e->d_name);
+        tab[0] = (char *)"sweep";
+        tab[1] = (char *)"--table";
+        tab[2] = path;
+        tab[3] = NULL;
+        t0 = now();
+        rc = capdyn_envv(tdir, &out, &err, "1", tab);
+        cr_expect_eq(rc, 1, "%s: exit %d: %s", name, rc, err);
+        cr_expect(out && !*out, "%s: nothing on stdout", name);
+        one_error_line(err, want);
+        cr_expect_lt(now() - t0, 20, "%s: within the time limit", name);
+        free(out);
+        free(err);
+
+        snprintf(cp, sizeof cp, "%s/%s", tdir, e->d_name);
+        {
+            FILE *f = fopen(path, "rb"), *g = fopen(cp, "wb");
+            char buf[4096];
+            size_t k;
+            cr_assert(f && g);
+            while ((k = fread(buf, 1, sizeof buf, f)) > 0) fwrite(buf, 1, k, g);
+            fclose(f);
+            fclose(g);
+        }
+        before = slurp(path);
+        res[n++] = (char *)"sweep";
+        res[n++] = sc;
+        res[n++] = (char *)"--set";
+        res[n++] = (char *)"simulation.duration=0.02";
+        res[n++] = (char *)"--set";
+        res[n++] = (char *)"simulation.output_dt=0.01";
+        res[n++] = (char *)"--vary";
+        res[n++] = (char *)"target.object.mass=0.3,0.4";
+        res[n++] = (char *)"--resume";
+        res[n++] = (char *)"-q";
+        res[n++] = (char *)"-o";
+        res[n++] = cp;
+        res[n] = NULL;
+        rc = capdyn_envv(tdir, &out, &err, "1", res);
+        cr_expect_eq(rc, 1, "--resume %s: exit %d: %s", name, rc, err);
+        one_error_line(err, want);
+        after = slurp(cp);
+        /* compared as files of the same size and bytes (they hold zeros) */
+        {
+            struct stat s1, s2;
+            cr_expect(stat(path, &s1) == 0 && stat(cp, &s2) == 0 && s1.st_size == s2.st_size &&
+                          before && after && !memcmp(before, after, (size_t)s1.st_size),
+                      "--resume %s left the file as it was", name);
+        }
+        free(before);
+        free(after);
+        free(out);
+        free(err);
+        free(want);
+        ncase++;
+    }
+    closedir(d);
+    cr_expect_geq(ncase, 7, "the damaged summaries are there");
+    rm_rf(tdir);
+}
+
+Test(sweep_safety, a_fifo_is_never_opened_as_an_input, .timeout = 30)
+{
+    /* info, export, sweep --table and sweep --resume -o on a FIFO: refused
+     * at once (it would block forever), one error line, exit 1 */
+    char dir[64], fifo[600], sc[600], *err;
+    double t0 = now();
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(fifo, sizeof fifo, "%s/p.h5", dir);
+    cr_assert_eq(mkfifo(fifo, 0644), 0);
+    cr_expect_eq(capdyn(dir, NULL, &err, "info", fifo, NULL), 1);
+    one_error_line(err, "is not a results file: it is a FIFO");
+    free(err);
+    cr_expect_eq(capdyn(dir, NULL, &err, "export", "--every", "2", fifo, "time", NULL), 1);
+    one_error_line(err, "is not a results file: it is a FIFO");
+    free(err);
+    cr_expect_eq(capdyn(dir, NULL, &err, "sweep", "--table", fifo, NULL), 1);
+    one_error_line(err, "is not a sweep summary: it is a FIFO");
+    free(err);
+    cr_expect_eq(capdyn(dir, NULL, &err, "sweep", sc, TINY, TWO, "--resume", "-o", fifo, NULL), 1);
+    one_error_line(err, "it exists and is not a regular file");
+    free(err);
+    cr_expect_lt(now() - t0, 20);
+    rm_rf(dir);
+}
+
+Test(sweep_safety, the_grid_size_is_checked_before_its_values_are_made, .timeout = 30)
+{
+    /* four keys of 10^7 values each: 10^28 variants, refused in well under
+     * a second (the values of each key were made first: 40 s, 1.5 GB) */
+    char dir[64], sc[600], *err;
+    double t0;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    t0 = now();
+    cr_expect_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "a=0:1:10000000", "--vary", "b=0:1:10000000",
+                        "--vary", "c=0:1:10000000", "--vary", "d=0:1:10000000", NULL),
+                 1);
+    cr_expect_lt(now() - t0, 2.0, "refused at once: %.2f s", now() - t0);
+    one_error_line(err, "the grid has 1e+28 variants, more than 10000000");
+    free(err);
+    /* one variant over the limit */
+    cr_expect_eq(capdyn(dir, NULL, &err, "sweep", sc, "--vary", "a=0:1:10001", "--vary", "b=0:1:1000", NULL), 1);
+    one_error_line(err, "the grid has 10001000 variants, more than 10000000");
+    free(err);
+    rm_rf(dir);
+}
