@@ -1,11 +1,23 @@
-/* capdyn sweep: the plan of a sweep, one variant's outcome, the summary file
- * (docs/sweep.md). Internal to src/cli. */
+/* capdyn sweep: declarations shared by its files (docs/sweep.md; the
+ * layout of src/cli is in docs/cli.md, "Source layout"):
+ *   sweep.c         the command: options, the driver
+ *   sweep_plan.c    the plan: --vary specs, grid and Latin hypercube, region
+ *   sweep_run.c     running the variants: worker processes, MPI ranks
+ *   sweep_h5.c      the summary file: writing (with its lock), reading
+ *   sweep_report.c  what is printed: progress bar, end report, --table
+ * Internal to src/cli. */
 #ifndef CD_CLI_SWEEP_H
 #define CD_CLI_SWEEP_H
 
 #include "cli.h"
 
+#include <signal.h>
+
 #define SW_MAX_KEYS 4
+#define SW_MAX_JOBS 1024
+/* Seconds of wall time between two summary checkpoints: a sweep killed
+ * without a chance to write (SIGKILL, power) loses at most this much work. */
+#define SW_CHECKPOINT 10.0
 #define SW_MAX_VARIANTS 10000000L /* the largest sweep (summary rows) */
 #define SW_REASON 512             /* bytes of a failure reason */
 
@@ -132,5 +144,69 @@ int sw_summary_table(const char *path);
  * label SW_LABEL bytes) may be NULL to count. */
 #define SW_LABEL 256
 long sw_region(const sw_plan *p, const sw_result *res, double length, double *area, long *ncap, char *label);
+
+/* The command line of a sweep (sweep.c). */
+typedef struct {
+    const char *scenario, *output, *keep_dir, *table;
+    const char **sets;
+    int nsets;
+    const char *vary[SW_MAX_KEYS + 1];
+    int nvary;
+    long lhs, jobs;
+    unsigned long long seed;
+    int quiet, resume, have_jobs, until_verdict;
+    double length;
+} sw_opts;
+
+/* What a variant needs (constant while the sweep runs). */
+typedef struct {
+    const sw_opts *o;
+    const sw_plan *p;
+    sw_out *out;    /* the summary (rank 0 / the parent only) */
+} sw_ctx;
+
+/* ---- sweep_plan.c ---- */
+/* The plan of --vary texts vary (nvary), a grid or (lhs > 0) a Latin
+ * hypercube of lhs variants with seed: p filled (free with sw_plan_free).
+ * CLI_OK, or the exit status after one error line (usage: CLI_USAGE). */
+int sw_plan_make(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed);
+void sw_plan_free(sw_plan *p);
+/* The --set list of variant idx: the nsets base overrides, then KEY=VALUE
+ * of each swept key; NULL-terminated, malloc'd (sw_overrides_free). NULL
+ * if out of memory. */
+char **sw_overrides(const char *const *sets, int nsets, const sw_plan *p, long idx);
+void sw_overrides_free(char **ov);
+
+/* ---- sweep_run.c ---- */
+/* Runs variant idx in this process into r (its failure recorded in r). */
+void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r);
+
+/* The progress bar (sweep_report.c). */
+typedef struct {
+    int on, drawn;
+    double t0, last;
+    long total, done0; /* done0: finished before this invocation (resume) */
+} sw_progress;
+
+/* Runs the variants not yet run (status SW_NOT_RUN) on nj worker processes
+ * (size 1) or, under MPI, on the size - 1 other ranks; SIGINT and SIGTERM
+ * stop it (the variants in flight are then not run), SIGPIPE is ignored
+ * meanwhile; checkpoints the summary every SW_CHECKPOINT s. Returns 0, the
+ * signal that stopped it, or -1 on an error (reported). */
+int sw_run(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int nj, int size, sw_progress *pg, long *ndone,
+           long *nfail, double wall0);
+#ifdef CAPDYN_MPI
+/* Started by an MPI launcher? */
+int sw_under_mpi(void);
+/* A worker rank: runs what rank 0 hands out until told to stop. */
+void sw_mpi_worker(const sw_ctx *cx);
+#endif
+
+/* ---- sweep_report.c ---- */
+void sw_draw(sw_progress *pg, long done, long failed, int force);
+void sw_clear(sw_progress *pg);
+/* The end-of-sweep lines on stdout: counts, regions, failed variants. */
+void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, long ndone, long nfail, long nrun0,
+                   double wall, int nj);
 
 #endif
