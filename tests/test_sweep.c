@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <dirent.h>
 
 /* ---- comparing two summaries (everything but /timing) -------------------- */
 
@@ -682,5 +683,106 @@ Test(sweep, a_killed_sweep_leaves_a_readable_summary_and_resumes_to_the_same, .t
     free(err);
     same_summary(full, part);
     same_summary(part, full);
+    rm_rf(dir);
+}
+
+/* the pid of the process whose environment has OMPI_COMM_WORLD_RANK=rank
+ * and whose parent is ppid, or -1 */
+static pid_t mpi_rank_pid(pid_t ppid, int rank)
+{
+    DIR *d = opendir("/proc");
+    struct dirent *e;
+    pid_t found = -1;
+    char want[64];
+    snprintf(want, sizeof want, "OMPI_COMM_WORLD_RANK=%d", rank);
+    if (!d) return -1;
+    while (found < 0 && (e = readdir(d)) != NULL) {
+        char p[300], buf[65536];
+        long pid = atol(e->d_name), pp = -1;
+        FILE *f;
+        size_t n, i;
+        if (pid <= 0) continue;
+        snprintf(p, sizeof p, "/proc/%ld/stat", pid);
+        if (!(f = fopen(p, "r"))) continue;
+        if (fscanf(f, "%*d (%*[^)]) %*c %ld", &pp) != 1) pp = -1;
+        fclose(f);
+        if (pp != (long)ppid) continue;
+        snprintf(p, sizeof p, "/proc/%ld/environ", pid);
+        if (!(f = fopen(p, "r"))) continue;
+        n = fread(buf, 1, sizeof buf - 1, f);
+        fclose(f);
+        buf[n] = 0;
+        for (i = 0; i < n; i += strlen(buf + i) + 1)
+            if (!strcmp(buf + i, want)) found = (pid_t)pid;
+    }
+    closedir(d);
+    return found;
+}
+
+Test(sweep, mpirun_with_a_rank_killed_then_resumed_gives_the_serial_summary, .timeout = 300)
+{
+    /* issue 24: three ranks; a worker rank (rank 1) is SIGKILLed a second
+     * in. Open MPI then ends the job (rank 0 gets SIGTERM: it writes the
+     * summary of what finished, or the last checkpoint stays), and a
+     * serial --resume completes it to the summary of an uninterrupted
+     * serial sweep. */
+    const char *mb = getenv("CAPDYN_MPI_BIN");
+    char dir[256], sc[512], s1[512], sm[512], *err = NULL, *out = NULL;
+    char e1[] = "OMPI_ALLOW_RUN_AS_ROOT=1", e2[] = "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1", e3[] = "OMPI_MCA_btl=self,vader";
+    char *argv[40], *env[4];
+    int n = 0, st;
+    pid_t pid, victim = -1;
+    double t0;
+    env[0] = e1;
+    env[1] = e2;
+    env[2] = e3;
+    env[3] = NULL;
+    if (!mb || !*mb) cr_skip_test("capdyn is not built with MPI here ('make MPI=1 test' runs this test)");
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s1, sizeof s1, "%s/serial.h5", dir);
+    snprintf(sm, sizeof sm, "%s/mpi.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, GRID5, "-j", "2", "-q", "-o", s1, NULL), 0, "%s", err);
+    free(err);
+    argv[n++] = "/usr/bin/env";
+    argv[n++] = "mpirun";
+    argv[n++] = "-n";
+    argv[n++] = "3";
+    argv[n++] = "--oversubscribe";
+    n = sweep_argv(argv, n, mb, sc);
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[0]=-0.004:0.004:5";
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[1]=0.07:0.09:5";
+    argv[n++] = "-q";
+    argv[n++] = "-o";
+    argv[n++] = sm;
+    argv[n] = NULL;
+    pid = spawn(dir, argv, env);
+    /* /usr/bin/env execs mpirun: its ranks are pid's children */
+    for (t0 = now(); now() - t0 < 60 && victim < 0;) {
+        struct stat st_;
+        if (stat(sm, &st_) == 0) victim = mpi_rank_pid(pid, 1);
+        if (victim < 0) sleep_s(0.05);
+    }
+    cr_assert_gt(victim, 0, "rank 1 found once the first summary is written");
+    sleep_s(1.0);
+    kill(victim, SIGKILL);
+    st = wait_status(pid);
+    if (st == 0) cr_log_warn("mpirun ended before the kill took effect: resume is a no-op");
+    else {
+        hid_t f = open_ro(sm);
+        cr_assert(f >= 0, "the summary after the kill is readable");
+        cr_log_info("mpirun exit %d; %lld of 25 variants in the summary", st, attr_ll(f, "n_run"));
+        cr_assert_lt(attr_ll(f, "n_run"), 25);
+        H5Fclose(f);
+    }
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, GRID5, "-j", "2", "--resume", "-o", sm, NULL), 0, "%s",
+                 err);
+    cr_assert(strstr(out, "25 of 25 variants run"), "%s", out);
+    free(out);
+    free(err);
+    same_summary(s1, sm);
+    same_summary(sm, s1);
     rm_rf(dir);
 }
