@@ -122,7 +122,7 @@ double cli_read_limit(const char *path)
     struct stat st;
     double v;
     if (e && cli_number(e, &v) == 0 && v > 0) return v;
-    return 60.0 + (stat(path, &st) == 0 ? (double)st.st_size / 1e7 : 0.0);
+    return 60.0 + (stat(path, &st) == 0 ? (double)st.st_size / 1e6 : 0.0);
 }
 
 /* Reading a file in a child process (docs/reliability.md, "Untrusted

@@ -67,6 +67,28 @@ static void restore_signals(const struct sigaction *i, const struct sigaction *t
     sigaction(SIGXFSZ, x, NULL);
 }
 
+/* SIGINT and SIGTERM stop the run (on_signal), SIGXFSZ is ignored; the
+ * previous handlers and mask go to the old_* for restore_signals. */
+static void catch_signals(struct sigaction *old_int, struct sigaction *old_term, struct sigaction *old_xfsz,
+                          sigset_t *old_mask)
+{
+    struct sigaction sa;
+    sigset_t unblock;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, old_int);
+    sigaction(SIGTERM, &sa, old_term);
+    sa.sa_handler = SIG_IGN;
+    sigaction(SIGXFSZ, &sa, old_xfsz);
+    /* a run started with these blocked (inherited mask) still stops on them;
+     * one already pending is delivered here and stops the run at its start */
+    sigemptyset(&unblock);
+    sigaddset(&unblock, SIGINT);
+    sigaddset(&unblock, SIGTERM);
+    sigprocmask(SIG_UNBLOCK, &unblock, old_mask);
+}
+
 /* Most samples a run may ask for (the loader's limit, docs/scenario-format.md). */
 #define CLI_MAX_SAMPLES 1e9
 
@@ -538,8 +560,8 @@ int cmd_run(int argc, char **argv)
     char outbuf[1024], msg[768], wmsg[512];
     const char *out;
     int rc = parse_opts("run", argc, argv, &o, 1), exitc;
-    struct sigaction sa, old_int, old_term, old_xfsz;
-    sigset_t unblock, old_mask;
+    struct sigaction old_int, old_term, old_xfsz;
+    sigset_t old_mask;
 
     if (rc) {
         free(o.sets);
@@ -556,19 +578,7 @@ int cmd_run(int argc, char **argv)
      * while it is being created still ends with a closed file. SIGXFSZ
      * (file size limit, ulimit -f) would kill the process in the middle of
      * an HDF5 write: ignored, the write fails with EFBIG and is reported. */
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
-    sa.sa_handler = SIG_IGN;
-    sigaction(SIGXFSZ, &sa, &old_xfsz);
-    /* a run started with these blocked (inherited mask) still stops on them;
-     * one already pending is delivered here and stops the run at its start */
-    sigemptyset(&unblock);
-    sigaddset(&unblock, SIGINT);
-    sigaddset(&unblock, SIGTERM);
-    sigprocmask(SIG_UNBLOCK, &unblock, &old_mask);
+    catch_signals(&old_int, &old_term, &old_xfsz, &old_mask);
 
     /* the results file first: an unwritable path fails before any work */
     w = cd_h5_create(out, m, sc, &err);

@@ -188,10 +188,45 @@ static const sw_col lcols[] = {
 };
 #define NCOL(a) (sizeof a / sizeof a[0])
 
+/* /region (sw_region) of a grid over two ranges; nothing otherwise. */
+static int write_region(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, unsigned long long *h)
+{
+    long nslice = sw_region(p, res, meta->length, NULL, NULL, NULL), s;
+    int rc = 0;
+    hid_t g;
+    if (nslice > 0) {
+        double *area = malloc(sizeof(double) * (size_t)nslice);
+        long *ncap = malloc(sizeof(long) * (size_t)nslice);
+        char *lab = malloc((size_t)nslice * SW_LABEL);
+        const char **labp = malloc(sizeof *labp * (size_t)nslice);
+        if (area && ncap && lab && labp && (g = group(f, "region")) >= 0) {
+            long long *lc = malloc(sizeof(long long) * (size_t)nslice);
+            sw_region(p, res, meta->length, area, ncap, lab);
+            for (s = 0; s < nslice; s++) labp[s] = lab + s * SW_LABEL;
+            rc |= dset_str(g, "slice", nslice, 0, labp, h);
+            rc |= dset(g, "area", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, nslice, 0, area,
+                       meta->length > 0 ? "1 (m^2 / length^2)" : "m^2", h);
+            if (lc) {
+                for (s = 0; s < nslice; s++) lc[s] = ncap[s];
+                rc |= dset(g, "captured", H5T_NATIVE_LLONG, H5T_STD_I64LE, nslice, 0, lc, NULL, h);
+                free(lc);
+            } else
+                rc = -1;
+            H5Gclose(g);
+        } else
+            rc = -1;
+        free(area);
+        free(ncap);
+        free(lab);
+        free(labp);
+    }
+    return rc;
+}
+
 static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
                       double total_wall)
 {
-    long n = p->nvar, i, nrun = 0, nfail = 0, nslice, s;
+    long n = p->nvar, i, nrun = 0, nfail = 0;
     int k, rc = 0;
     size_t c;
     double *dbuf = malloc(sizeof(double) * (size_t)(3 * n + 1));
@@ -261,33 +296,7 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
     rc |= dset(f, "offset", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 3, dbuf, "m", &h);
 
     /* the graspable region of each slice of a grid over two ranges */
-    nslice = sw_region(p, res, meta->length, NULL, NULL, NULL);
-    if (nslice > 0) {
-        double *area = malloc(sizeof(double) * (size_t)nslice);
-        long *ncap = malloc(sizeof(long) * (size_t)nslice);
-        char *lab = malloc((size_t)nslice * SW_LABEL);
-        const char **labp = malloc(sizeof *labp * (size_t)nslice);
-        if (area && ncap && lab && labp && (g = group(f, "region")) >= 0) {
-            long long *lc = malloc(sizeof(long long) * (size_t)nslice);
-            sw_region(p, res, meta->length, area, ncap, lab);
-            for (s = 0; s < nslice; s++) labp[s] = lab + s * SW_LABEL;
-            rc |= dset_str(g, "slice", nslice, 0, labp, &h);
-            rc |= dset(g, "area", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, nslice, 0, area,
-                       meta->length > 0 ? "1 (m^2 / length^2)" : "m^2", &h);
-            if (lc) {
-                for (s = 0; s < nslice; s++) lc[s] = ncap[s];
-                rc |= dset(g, "captured", H5T_NATIVE_LLONG, H5T_STD_I64LE, nslice, 0, lc, NULL, &h);
-                free(lc);
-            } else
-                rc = -1;
-            H5Gclose(g);
-        } else
-            rc = -1;
-        free(area);
-        free(ncap);
-        free(lab);
-        free(labp);
-    }
+    rc |= write_region(f, meta, p, res, &h);
 
     /* what differs between runs of the same sweep */
     g = group(f, "timing");
