@@ -6,7 +6,15 @@
  * rows are in variant order and every deterministic value is written from
  * the variants' results alone, so that the same sweep gives the same
  * summary for any -j or number of MPI ranks; wall times are in /timing
- * only. Objects are created without time stamps. */
+ * only. Objects are created without time stamps. The target is checked and
+ * locked as a results file of capdyn run is (sw_out), and every value is
+ * covered by a checksum (below).
+ *
+ * Read back (--table, --resume) by sw_summary_load in a child process with
+ * a time limit (cli_isolated): every size is checked against the file
+ * before anything is allocated, and the checksum is verified, so that a
+ * damaged file gives one error line, never a crash, a hang or other values
+ * (docs/reliability.md, "Sweeps"). */
 #define _DEFAULT_SOURCE /* flock */
 #define _POSIX_C_SOURCE 200809L
 #include "sweep.h"
@@ -223,6 +231,8 @@ static int write_region(hid_t f, const sw_meta *meta, const sw_plan *p, const sw
     return rc;
 }
 
+/* Everything but the file's creation; 0, -1 (an HDF5 call failed: disk
+ * full, quota, file size limit, I/O) or -2 (out of memory). */
 static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
                       double total_wall)
 {
