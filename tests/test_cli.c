@@ -1160,3 +1160,79 @@ Test(cli, an_overlapping_initial_pose_is_warned_about)
     free(err);
     rm_rf(dir);
 }
+
+/* the double of a dataset's element i (read as double) */
+static double ds_elem(const char *path, const char *name, long i)
+{
+    hid_t f = open_ro(path), d;
+    double v[64];
+    cr_assert(f >= 0, "%s", path);
+    d = H5Dopen2(f, name, H5P_DEFAULT);
+    cr_assert(d >= 0 && H5Dread(d, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0, "%s", name);
+    H5Dclose(d);
+    H5Fclose(f);
+    return v[i];
+}
+
+Test(cli, numbers_print_in_the_shortest_form_that_reads_back, .timeout = 60)
+{
+    /* issue 27: `sweep --table` printed 0.059999999999999998 and `length
+     * 0.14999999999999999`; `info` printed rtol 1.23456789e-9 as 1.23457e-09.
+     * Now: 0.06, length 0.15, rtol 1.23456789e-09; every number of the
+     * table reads back (strtod) as exactly the value in the summary, and
+     * none has more than the 17 significant digits a double needs. */
+    char dir[64], sc[512], s[600], r[600], *out = NULL, *err = NULL, *line, *save = NULL;
+    long row = 0;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s, sizeof s, "%s/s.h5", dir);
+    snprintf(r, sizeof r, "%s/r.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, "--set", "simulation.duration=0.02", "--set",
+                        "simulation.output_dt=0.01", "--vary", "target.object.position[0]=0.06,0.07", "--length", "0.15",
+                        "-q", "-o", s, NULL),
+                 0, "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", "--table", s, NULL), 0, "%s", err);
+    cr_expect(strstr(out, "# length 0.15 m "), "%s", out);
+    for (line = strtok_r(out, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        char tok[9][64];
+        double want[9];
+        int k;
+        if (line[0] == '#') continue;
+        cr_assert_eq(sscanf(line, "%*s %*s %63s %*s %*s %63s %63s %63s %63s %63s %63s %63s", tok[0], tok[1], tok[2],
+                            tok[3], tok[4], tok[5], tok[6], tok[7]),
+                     8, "%s", line);
+        want[0] = ds_elem(s, "param_numeric", row) / 0.15;
+        want[1] = ds_elem(s, "t_capture", row);
+        want[2] = ds_elem(s, "t_escape", row);
+        want[3] = ds_elem(s, "peak_fn", row);
+        want[4] = ds_elem(s, "peak_tau", row);
+        want[5] = ds_elem(s, "epsilon", row);
+        want[6] = ds_elem(s, "fn_step_max", row);
+        want[7] = ds_elem(s, "t_final", row);
+        for (k = 0; k < 8; k++) {
+            double v = strtod(tok[k], NULL);
+            size_t digits = 0;
+            const char *c;
+            for (c = tok[k]; *c && *c != 'e'; c++) digits += *c >= '0' && *c <= '9';
+            if (isnan(want[k])) cr_expect_str_eq(tok[k], "nan", "column %d: %s", k, line);
+            else cr_expect_eq(v, want[k], "column %d: '%s' reads back as %.17g, the summary has %.17g", k, tok[k], v, want[k]);
+            cr_expect_leq(digits, 18, "'%s': at most 17 significant digits", tok[k]);
+        }
+        cr_expect_str_eq(tok[7], "0.02", "t_final: %s", line);
+        cr_expect(!strncmp(line, row ? "1 0.07 " : "0 0.06 ", 7), "the swept value as given: %s", line);
+        row++;
+    }
+    cr_expect_eq(row, 2);
+    free(out);
+    free(err);
+    cr_assert_eq(capdyn(dir, NULL, &err, "run", sc, "-q", "-o", r, "--set", "simulation.duration=0.02", "--set",
+                        "simulation.rtol=1.23456789e-9", NULL),
+                 0, "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, &out, &err, "info", r, NULL), 0, "%s", err);
+    cr_expect(strstr(out, "rtol 1.23456789e-09, atol 1e-10"), "%s", out);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}

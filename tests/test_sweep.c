@@ -19,6 +19,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <dirent.h>
 
 /* ---- comparing two summaries (everything but /timing) -------------------- */
 
@@ -588,5 +589,200 @@ Test(sweep, mpirun_two_ranks_gives_the_serial_summary, .timeout = 300)
     cr_assert_eq(attr_ll(g, "jobs"), 2, "the summary was written by rank 0 of 2");
     H5Gclose(g);
     H5Fclose(f);
+    rm_rf(dir);
+}
+
+Test(sweep, resume_of_a_finished_sweep_changes_nothing, .timeout = 120)
+{
+    /* issue 24: --resume on a complete summary used to mark variant 0 not
+     * run (status -1, complete 0) and exit 0. Now: exit 0, "3 of 3 variants
+     * run", and the summary equal to the one before (all but /timing). */
+    char dir[256], sc[512], s[512], before[512], *out = NULL, *err = NULL, *bytes;
+    hid_t f;
+    long i;
+    FILE *fp;
+    struct stat st;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s, sizeof s, "%s/s.h5", dir);
+    snprintf(before, sizeof before, "%s/before.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, "--vary", "target.object.mass=0.3,0.4,0.5", "-q", "-o", s,
+                        NULL),
+                 0, "%s", err);
+    free(err);
+    cr_assert_eq(stat(s, &st), 0);
+    bytes = malloc((size_t)st.st_size);
+    fp = fopen(s, "rb");
+    cr_assert(bytes && fp && fread(bytes, 1, (size_t)st.st_size, fp) == (size_t)st.st_size);
+    fclose(fp);
+    fp = fopen(before, "wb");
+    cr_assert(fp && fwrite(bytes, 1, (size_t)st.st_size, fp) == (size_t)st.st_size);
+    fclose(fp);
+    free(bytes);
+    for (i = 0; i < 2; i++) { /* twice, with one and with two workers */
+        cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary", "target.object.mass=0.3,0.4,0.5", "-j",
+                            i ? "2" : "1", "--resume", "-o", s, NULL),
+                     0, "%s", err);
+        cr_assert(strstr(out, "3 of 3 variants run (0 failed), 0 in"), "%s", out);
+        free(out);
+        free(err);
+    }
+    f = open_ro(s);
+    cr_assert(f >= 0);
+    cr_assert_eq(attr_ll(f, "complete"), 1);
+    cr_assert_eq(attr_ll(f, "n_run"), 3);
+    for (i = 0; i < 3; i++) cr_assert_eq(ds_ll(f, "status", i), 0, "variant %ld", i);
+    H5Fclose(f);
+    same_summary(before, s);
+    same_summary(s, before);
+    rm_rf(dir);
+}
+
+Test(sweep, a_killed_sweep_leaves_a_readable_summary_and_resumes_to_the_same, .timeout = 240)
+{
+    /* SIGKILL (no chance to write) half a second into an 8-variant sweep:
+     * the summary on disk is the last complete one (written before the
+     * first variant, then at each 10 s checkpoint): --table reads it, every
+     * row not yet written is "not run", and --resume, started while the
+     * orphaned worker may still be finishing its variant (it must not hold
+     * the summary's lock), completes it to the uninterrupted summary. */
+    char dir[256], sc[512], full[512], part[512], *out = NULL, *err = NULL;
+    char *argv[32];
+    int n = 0, st;
+    pid_t pid;
+    const char *vary = "target.object.position[1]=0.07:0.09:8";
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(full, sizeof full, "%s/full.h5", dir);
+    snprintf(part, sizeof part, "%s/part.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, "--vary", vary, "-j", "2", "-q", "-o", full, NULL), 0,
+                 "%s", err);
+    free(err);
+    n = sweep_argv(argv, n, bin(), sc);
+    argv[n++] = "--vary";
+    argv[n++] = (char *)vary;
+    argv[n++] = "-j";
+    argv[n++] = "1";
+    argv[n++] = "-q";
+    argv[n++] = "-o";
+    argv[n++] = part;
+    argv[n] = NULL;
+    pid = spawn(dir, argv, NULL);
+    sleep_s(0.5);
+    kill(pid, SIGKILL);
+    st = wait_status(pid);
+    if (st != 128 + SIGKILL) cr_log_warn("the sweep ended (%d) before SIGKILL: a very fast machine", st);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", "--table", part, NULL), 0, "the summary is readable: %s", err);
+    cr_assert(strstr(out, ": 8 variants"), "%s", out);
+    free(out);
+    free(err);
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, "--vary", vary, "-j", "2", "--resume", "-o", part, NULL),
+                 0, "%s", err);
+    cr_assert(strstr(out, "8 of 8 variants run"), "%s", out);
+    free(out);
+    free(err);
+    same_summary(full, part);
+    same_summary(part, full);
+    rm_rf(dir);
+}
+
+/* the pid of the process whose environment has OMPI_COMM_WORLD_RANK=rank
+ * and whose parent is ppid, or -1 */
+static pid_t mpi_rank_pid(pid_t ppid, int rank)
+{
+    DIR *d = opendir("/proc");
+    struct dirent *e;
+    pid_t found = -1;
+    char want[64];
+    snprintf(want, sizeof want, "OMPI_COMM_WORLD_RANK=%d", rank);
+    if (!d) return -1;
+    while (found < 0 && (e = readdir(d)) != NULL) {
+        char p[300], buf[65536];
+        long pid = atol(e->d_name), pp = -1;
+        FILE *f;
+        size_t n, i;
+        if (pid <= 0) continue;
+        snprintf(p, sizeof p, "/proc/%ld/stat", pid);
+        if (!(f = fopen(p, "r"))) continue;
+        if (fscanf(f, "%*d (%*[^)]) %*c %ld", &pp) != 1) pp = -1;
+        fclose(f);
+        if (pp != (long)ppid) continue;
+        snprintf(p, sizeof p, "/proc/%ld/environ", pid);
+        if (!(f = fopen(p, "r"))) continue;
+        n = fread(buf, 1, sizeof buf - 1, f);
+        fclose(f);
+        buf[n] = 0;
+        for (i = 0; i < n; i += strlen(buf + i) + 1)
+            if (!strcmp(buf + i, want)) found = (pid_t)pid;
+    }
+    closedir(d);
+    return found;
+}
+
+Test(sweep, mpirun_with_a_rank_killed_then_resumed_gives_the_serial_summary, .timeout = 300)
+{
+    /* issue 24: three ranks; a worker rank (rank 1) is SIGKILLed a second
+     * in. Open MPI then ends the job (rank 0 gets SIGTERM: it writes the
+     * summary of what finished, or the last checkpoint stays), and a
+     * serial --resume completes it to the summary of an uninterrupted
+     * serial sweep. */
+    const char *mb = getenv("CAPDYN_MPI_BIN");
+    char dir[256], sc[512], s1[512], sm[512], *err = NULL, *out = NULL;
+    char e1[] = "OMPI_ALLOW_RUN_AS_ROOT=1", e2[] = "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1", e3[] = "OMPI_MCA_btl=self,vader";
+    char *argv[40], *env[4];
+    int n = 0, st;
+    pid_t pid, victim = -1;
+    double t0;
+    env[0] = e1;
+    env[1] = e2;
+    env[2] = e3;
+    env[3] = NULL;
+    if (!mb || !*mb) cr_skip_test("capdyn is not built with MPI here ('make MPI=1 test' runs this test)");
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "tako_centred.toml");
+    snprintf(s1, sizeof s1, "%s/serial.h5", dir);
+    snprintf(sm, sizeof sm, "%s/mpi.h5", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, SHORT, GRID5, "-j", "2", "-q", "-o", s1, NULL), 0, "%s", err);
+    free(err);
+    argv[n++] = "/usr/bin/env";
+    argv[n++] = "mpirun";
+    argv[n++] = "-n";
+    argv[n++] = "3";
+    argv[n++] = "--oversubscribe";
+    n = sweep_argv(argv, n, mb, sc);
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[0]=-0.004:0.004:5";
+    argv[n++] = "--vary";
+    argv[n++] = "target.object.position[1]=0.07:0.09:5";
+    argv[n++] = "-q";
+    argv[n++] = "-o";
+    argv[n++] = sm;
+    argv[n] = NULL;
+    pid = spawn(dir, argv, env);
+    /* /usr/bin/env execs mpirun: its ranks are pid's children */
+    for (t0 = now(); now() - t0 < 60 && victim < 0;) {
+        struct stat st_;
+        if (stat(sm, &st_) == 0) victim = mpi_rank_pid(pid, 1);
+        if (victim < 0) sleep_s(0.05);
+    }
+    cr_assert_gt(victim, 0, "rank 1 found once the first summary is written");
+    sleep_s(1.0);
+    kill(victim, SIGKILL);
+    st = wait_status(pid);
+    if (st == 0) cr_log_warn("mpirun ended before the kill took effect: resume is a no-op");
+    else {
+        hid_t f = open_ro(sm);
+        cr_assert(f >= 0, "the summary after the kill is readable");
+        cr_log_info("mpirun exit %d; %lld of 25 variants in the summary", st, attr_ll(f, "n_run"));
+        cr_assert_lt(attr_ll(f, "n_run"), 25);
+        H5Fclose(f);
+    }
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", sc, SHORT, GRID5, "-j", "2", "--resume", "-o", sm, NULL), 0, "%s",
+                 err);
+    cr_assert(strstr(out, "25 of 25 variants run"), "%s", out);
+    free(out);
+    free(err);
+    same_summary(s1, sm);
+    same_summary(sm, s1);
     rm_rf(dir);
 }

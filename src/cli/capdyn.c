@@ -15,16 +15,8 @@
 
 #include <gsl/gsl_errno.h>
 #include <hdf5.h>
-#include <errno.h>
-#include <math.h>
-#include <stdarg.h>
-#include <stdlib.h>
-#include <signal.h>
+#include <stdio.h>
 #include <string.h>
-#include <sys/types.h>
-#include <sys/wait.h>
-#include <time.h>
-#include <unistd.h>
 
 static const char *top_help =
     "usage: capdyn COMMAND [ARGS...]\n"
@@ -47,139 +39,50 @@ static const char *top_help =
     "'capdyn COMMAND --help' describes a command; docs/cli.md is the manual.\n"
     "exit status: 0 success, 1 runtime error, 2 bad command line, 130 interrupted.\n";
 
-/* Writes msg with its control characters escaped (\n, \t, \r, \xNN; C1
- * controls in UTF-8 as \u00NN): a message that quotes a file name or an
- * argument stays one line and cannot drive the terminal. */
-static void put_escaped(const char *msg)
+/* info and export of a results file: in a child process (cli_isolated) */
+typedef struct {
+    int (*fn)(int, char **);
+    int argc;
+    char **argv;
+} cmd_call;
+static int call_cmd(void *arg)
 {
-    const unsigned char *p = (const unsigned char *)msg;
-    for (; *p; p++) {
-        if (*p == '\n') fputs("\\n", stderr);
-        else if (*p == '\t') fputs("\\t", stderr);
-        else if (*p == '\r') fputs("\\r", stderr);
-        else if (*p < 0x20 || *p == 0x7f) fprintf(stderr, "\\x%02x", *p);
-        else if (*p == 0xc2 && p[1] >= 0x80 && p[1] <= 0x9f) fprintf(stderr, "\\u%04x", *++p);
-        else fputc(*p, stderr);
+    cmd_call *c = arg;
+    return c->fn(c->argc, c->argv);
+}
+
+/* The results file of info / export: the first argument that is neither
+ * an option nor the value of one of the options in valued (NULL-ended). */
+static const char *file_arg(int argc, char **argv, const char *const *valued)
+{
+    int i, k;
+    for (i = 1; i < argc; i++) {
+        if (argv[i][0] != '-' || !argv[i][1]) return argv[i];
+        for (k = 0; valued[k]; k++)
+            if (!strcmp(argv[i], valued[k])) i++;
     }
+    return NULL;
 }
 
-static void vmessage(const char *fmt, va_list ap)
-{
-    char buf[4096];
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    fputs("capdyn: error: ", stderr);
-    put_escaped(buf);
-}
-
-void cli_error(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vmessage(fmt, ap);
-    va_end(ap);
-    fputc('\n', stderr);
-}
-
-int cli_usage(const char *cmd, const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vmessage(fmt, ap);
-    va_end(ap);
-    if (cmd) fprintf(stderr, " (see 'capdyn %s --help')\n", cmd);
-    else fputs(" (see 'capdyn --help')\n", stderr);
-    return CLI_USAGE;
-}
-
-int cli_number(const char *s, double *v)
-{
-    char *end;
-    double x;
-    if (!s || !*s) return -1;
-    errno = 0;
-    x = strtod(s, &end);
-    if (*end || errno || !isfinite(x)) return -1;
-    *v = x;
-    return 0;
-}
-
-int cli_count(const char *s, long *v)
-{
-    char *end;
-    long x;
-    if (!s || !*s) return -1;
-    errno = 0;
-    x = strtol(s, &end, 10);
-    if (*end || errno || x < 0) return -1;
-    *v = x;
-    return 0;
-}
-
-double cli_wall(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Reading a results file (info, export) in a child process
- * (docs/reliability.md, "Untrusted results files"). The reader checks
- * every size and index it takes from a file, but libhdf5 1.10 itself can
- * crash on a damaged file (measured: a flipped bit in an attribute's size
- * field). The child writes its stdout into a temporary file; the parent
- * copies it out only if the child exited (with its status), so a crash
- * becomes one error line and exit status 1, with nothing half printed.
- * CAPDYN_NO_ISOLATION=1 reads in this process (for debuggers). */
 static int isolated(int (*fn)(int, char **), int argc, char **argv)
 {
-    const char *path = NULL;
-    FILE *tmp;
-    pid_t pid;
-    int st, i;
-    char buf[65536];
-    size_t n;
-    for (i = 1; i < argc && !path; i++)
-        if (argv[i][0] != '-') path = argv[i];
-    if (!path || getenv("CAPDYN_NO_ISOLATION")) return fn(argc, argv);
-    fflush(NULL);
-    tmp = tmpfile();
-    if (!tmp) return fn(argc, argv);
-    pid = fork();
-    if (pid < 0) {
-        fclose(tmp);
-        return fn(argc, argv);
-    }
-    if (pid == 0) {
-        int rc = CLI_FAIL;
-        if (dup2(fileno(tmp), STDOUT_FILENO) >= 0) rc = fn(argc, argv);
-        if (fflush(stdout) != 0 && rc == CLI_OK) {
-            cli_error("writing the output failed");
-            rc = CLI_FAIL;
-        }
-        exit(rc);
-    }
-    while (waitpid(pid, &st, 0) < 0)
-        if (errno != EINTR) {
-            fclose(tmp);
-            cli_error("waiting for the reading process failed: %s", strerror(errno));
-            return CLI_FAIL;
-        }
-    if (!WIFEXITED(st)) {
-        fclose(tmp);
-        cli_error("'%s': reading the file crashed inside the HDF5 library (%s): the file is damaged; nothing was "
-                  "printed",
-                  path, WIFSIGNALED(st) ? strsignal(WTERMSIG(st)) : "stopped");
+    static const char *const valued[] = {"--every", "--frames", "--at", "--view", "--precision", NULL};
+    const char *path = file_arg(argc, argv, valued);
+    char msg[1024];
+    cmd_call c;
+    int i;
+    for (i = 1; i < argc; i++)
+        if (!strcmp(argv[i], "-h") || !strcmp(argv[i], "--help")) return fn(argc, argv);
+    if (!path) return fn(argc, argv);
+    /* a FIFO would block the reader forever: refused before it is opened */
+    if (cli_regular_input(path, "results file", msg, sizeof msg) != 0) {
+        cli_error("%s", msg);
         return CLI_FAIL;
     }
-    rewind(tmp);
-    while ((n = fread(buf, 1, sizeof buf, tmp)) > 0)
-        if (fwrite(buf, 1, n, stdout) != n) break;
-    fclose(tmp);
-    if (fflush(stdout) != 0) {
-        cli_error("writing the output failed");
-        return CLI_FAIL;
-    }
-    return WEXITSTATUS(st);
+    c.fn = fn;
+    c.argc = argc;
+    c.argv = argv;
+    return cli_isolated(path, call_cmd, &c);
 }
 
 int main(int argc, char **argv)

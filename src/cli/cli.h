@@ -1,28 +1,13 @@
-/* The capdyn command: declarations shared by the files of src/cli (docs/cli.md). */
+/* The capdyn command: the commands and the run loop they share (docs/cli.md,
+ * "Source layout"); the helpers every file uses are in cli_util.h. */
 #ifndef CD_CLI_H
 #define CD_CLI_H
 
 #include <stdio.h>
+#include "cli_util.h"
 #include "capdyn/io.h"
 #include "capdyn/control.h"
 #include "../io/h5_read.h"
-
-/* exit codes (docs/cli.md) */
-#define CLI_OK 0
-#define CLI_FAIL 1        /* runtime error: bad scenario, I/O, integrator failure */
-#define CLI_USAGE 2       /* bad command line */
-#define CLI_INTERRUPT 130 /* stopped by SIGINT or SIGTERM; results kept */
-
-/* "capdyn: error: ..." on stderr (one line). */
-void cli_error(const char *fmt, ...);
-/* A usage error of command cmd (NULL: the top level): the message, a hint to
- * --help, and CLI_USAGE to return. */
-int cli_usage(const char *cmd, const char *fmt, ...);
-/* Parses a finite number / a non-negative integer; 0 on success. */
-int cli_number(const char *s, double *v);
-int cli_count(const char *s, long *v);
-/* Seconds on a monotonic clock. */
-double cli_wall(void);
 
 /* check points deeper inside a shape than their radius at the data's state
  * (an initial pose that overlaps); the deepest described in msg */

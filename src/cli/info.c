@@ -238,12 +238,15 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
     {
         long long ns = 0, nr = 0, nf = 0, nl = 0, nd = 0, ng = 0, nj = 0, nws = 0, nwe = 0;
         double rtol = 0, atol = 0, hmin = 0, hmax = 0, tstiff = 0, tfin = 0;
+        char rs[CLI_NUM], as[CLI_NUM];
         /* the closing statistics exist from the start (placeholders): final
          * once the run wrote its status */
         int final = status && strcmp(status, "running") != 0 && cd_h5r_attr_i64(r, "/", "stats_nsteps", &ns) == 0 &&
                     ns >= 0;
         cd_h5r_attr_f64(r, "/", "rtol", &rtol);
         cd_h5r_attr_f64(r, "/", "atol", &atol);
+        cli_fmt_num(rs, rtol); /* as given in the scenario: every digit */
+        cli_fmt_num(as, atol);
         if (final) {
             cd_h5r_attr_i64(r, "/", "stats_nrejected", &nr);
             cd_h5r_attr_i64(r, "/", "stats_nrhs", &nf);
@@ -258,9 +261,9 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
             cd_h5r_attr_f64(r, "/", "stats_h_min", &hmin);
             cd_h5r_attr_f64(r, "/", "stats_h_max", &hmax);
             snprintf(line, sizeof line,
-                     "%s, rtol %g, atol %g: %lld steps (%lld rejected), %lld rhs evaluations, %lld event-locating "
+                     "%s, rtol %s, atol %s: %lld steps (%lld rejected), %lld rhs evaluations, %lld event-locating "
                      "steps; step %.3g .. %.3g s",
-                     stepper ? stepper : "?", rtol, atol, ns, nr, nf, nl, hmin, hmax);
+                     stepper ? stepper : "?", rs, as, ns, nr, nf, nl, hmin, hmax);
             if (nj > 0) {
                 size_t len = strlen(line);
                 snprintf(line + len, sizeof line - len, "; %lld Jacobians (in the evaluations)", nj);
@@ -275,14 +278,14 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
             double *a = cd_h5r_series(r, "/diagnostics/nsteps", NULL, &err);
             double *bb = cd_h5r_series(r, "/diagnostics/nrejected", NULL, &err);
             double *c = cd_h5r_series(r, "/diagnostics/nrhs", NULL, &err);
-            snprintf(line, sizeof line, "%s, rtol %g, atol %g: %.0f steps (%.0f rejected), %.0f rhs evaluations "
-                     "(at the last committed sample)", stepper ? stepper : "?", rtol, atol,
+            snprintf(line, sizeof line, "%s, rtol %s, atol %s: %.0f steps (%.0f rejected), %.0f rhs evaluations "
+                     "(at the last committed sample)", stepper ? stepper : "?", rs, as,
                      a ? a[n - 1] : 0.0, bb ? bb[n - 1] : 0.0, c ? c[n - 1] : 0.0);
             free(a);
             free(bb);
             free(c);
         } else {
-            snprintf(line, sizeof line, "%s, rtol %g, atol %g", stepper ? stepper : "?", rtol, atol);
+            snprintf(line, sizeof line, "%s, rtol %s, atol %s", stepper ? stepper : "?", rs, as);
         }
         print_wrapped_kv(out, "integrator", line);
         if (nd || ng) {

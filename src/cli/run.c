@@ -68,6 +68,28 @@ static void restore_signals(const struct sigaction *i, const struct sigaction *t
     sigaction(SIGXFSZ, x, NULL);
 }
 
+/* SIGINT and SIGTERM stop the run (on_signal), SIGXFSZ is ignored; the
+ * previous handlers and mask go to the old_* for restore_signals. */
+static void catch_signals(struct sigaction *old_int, struct sigaction *old_term, struct sigaction *old_xfsz,
+                          sigset_t *old_mask)
+{
+    struct sigaction sa;
+    sigset_t unblock;
+    memset(&sa, 0, sizeof sa);
+    sa.sa_handler = on_signal;
+    sigemptyset(&sa.sa_mask);
+    sigaction(SIGINT, &sa, old_int);
+    sigaction(SIGTERM, &sa, old_term);
+    sa.sa_handler = SIG_IGN;
+    sigaction(SIGXFSZ, &sa, old_xfsz);
+    /* a run started with these blocked (inherited mask) still stops on them;
+     * one already pending is delivered here and stops the run at its start */
+    sigemptyset(&unblock);
+    sigaddset(&unblock, SIGINT);
+    sigaddset(&unblock, SIGTERM);
+    sigprocmask(SIG_UNBLOCK, &unblock, old_mask);
+}
+
 /* Most samples a run may ask for (the loader's limit, docs/scenario-format.md). */
 #define CLI_MAX_SAMPLES 1e9
 
@@ -451,6 +473,94 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     return st;
 }
 
+/* The end of capdyn run: the file's summary on stdout (unless --quiet or
+ * the file could not be written), then one line on stderr if the run did
+ * not finish (msg: how it ended; wmsg: the first write error, "" if none). */
+static void run_report(const run_opts *o, const char *out, const run_ctx *ctx, const cd_data *d, cd_status st,
+                       int exitc, const char *msg, const char *wmsg)
+{
+    if (!wmsg[0] && !o->quiet) {
+        cd_error rerr;
+        cd_h5r *r = cd_h5r_open(out, &rerr);
+        if (r) {
+            cli_run_extra x;
+            x.wall = ctx->wall0;
+            x.fn_max = ctx->fn_max;
+            x.ft_max = ctx->ft_max;
+            cli_report(stdout, r, out, &x);
+            cd_h5r_close(r);
+        } else {
+            cli_error("reading back '%s': %s", out, rerr.msg);
+        }
+    }
+    fflush(stdout);
+    if (wmsg[0]) {
+        /* one line: the first write error (it names the file and what failed) */
+        if (st != CD_OK && st != CD_EIO)
+            cli_error("run failed (%s): %s", cd_status_string(st), msg);
+        cli_error("%s (simulation at t = %.9g s)", wmsg, d->t);
+    } else if (exitc == CLI_INTERRUPT)
+        fprintf(stderr, "capdyn: %s; results up to t = %.9g s kept in '%s'\n", msg, d->t, out);
+    else if (exitc != CLI_OK)
+        cli_error("run failed (%s): %s; results up to t = %.9g s kept in '%s'", cd_status_string(st), msg, d->t,
+                  out);
+}
+
+/* The scenario of capdyn run (o->sets freed), its data and controller
+ * (may be NULL): CLI_OK, or CLI_FAIL after one error line with nothing
+ * left allocated. */
+static int run_setup(run_opts *o, cd_scenario **scp, cd_data **dp, cd_ctrl **ctlp)
+{
+    cd_scenario *sc;
+    const cd_model *m;
+    cd_data *d;
+    cd_ctrl *ctl = NULL;
+    cd_error err;
+    double ratio;
+    *scp = NULL;
+    *dp = NULL;
+    *ctlp = NULL;
+    *scp = sc = cd_scenario_load(o->scenario, o->sets, o->nsets, &err);
+    free(o->sets);
+    if (!sc) {
+        cli_error("%s", err.msg);
+        return CLI_FAIL;
+    }
+    m = sc->model;
+    if (!(sc->duration > 0) || !(sc->output_dt > 0) || !isfinite(sc->duration)) {
+        cli_error("%s: duration and output_dt must be positive and finite", o->scenario);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    /* the loader bounds duration / output_dt; this guards the conversion to
+     * an integer (undefined behaviour when out of range) all the same */
+    ratio = sc->duration / sc->output_dt;
+    if (!(ratio <= CLI_MAX_SAMPLES)) {
+        cli_error("%s: duration / output_dt = %g samples is more than %g; raise simulation.output_dt",
+                  o->scenario, ratio, CLI_MAX_SAMPLES);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    *dp = d = cd_data_create(m, sc->event_capacity, &err);
+    if (!d) {
+        cli_error("%s", err.msg);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    warn_initial_overlap(o->scenario, m, d);
+    warn_fast_spin(o->scenario, sc);
+    /* the scenario's built-in controller ([control], docs/capture.md) */
+    if (sc->control && !(*ctlp = ctl = cd_ctrl_create(m, sc->control, &err))) {
+        cli_error("%s: %s", o->scenario, err.msg);
+        cd_data_free(d);
+        cd_ctrl_free(ctl);
+        cd_scenario_free(sc);
+        return CLI_FAIL;
+    }
+    if (ctl) cd_ctrl_install(ctl, d);
+    return CLI_OK;
+}
+
 int cmd_run(int argc, char **argv)
 {
     run_opts o;
@@ -468,9 +578,8 @@ int cmd_run(int argc, char **argv)
     char outbuf[1024], msg[768], wmsg[512];
     const char *out;
     int rc = parse_opts("run", argc, argv, &o, 1), exitc;
-    double ratio;
-    struct sigaction sa, old_int, old_term, old_xfsz;
-    sigset_t unblock, old_mask;
+    struct sigaction old_int, old_term, old_xfsz;
+    sigset_t old_mask;
 
     if (rc) {
         free(o.sets);
@@ -481,61 +590,13 @@ int cmd_run(int argc, char **argv)
         default_output(o.scenario, outbuf, sizeof outbuf);
         out = outbuf;
     }
-    sc = cd_scenario_load(o.scenario, o.sets, o.nsets, &err);
-    free(o.sets);
-    if (!sc) {
-        cli_error("%s", err.msg);
-        return CLI_FAIL;
-    }
+    if (run_setup(&o, &sc, &d, &ctl) != CLI_OK) return CLI_FAIL;
     m = sc->model;
-    if (!(sc->duration > 0) || !(sc->output_dt > 0) || !isfinite(sc->duration)) {
-        cli_error("%s: duration and output_dt must be positive and finite", o.scenario);
-        cd_scenario_free(sc);
-        return CLI_FAIL;
-    }
-    /* the loader bounds duration / output_dt; this guards the conversion to
-     * an integer (undefined behaviour when out of range) all the same */
-    ratio = sc->duration / sc->output_dt;
-    if (!(ratio <= CLI_MAX_SAMPLES)) {
-        cli_error("%s: duration / output_dt = %g samples is more than %g; raise simulation.output_dt",
-                  o.scenario, ratio, CLI_MAX_SAMPLES);
-        cd_scenario_free(sc);
-        return CLI_FAIL;
-    }
-    d = cd_data_create(m, sc->event_capacity, &err);
-    if (!d) {
-        cli_error("%s", err.msg);
-        cd_scenario_free(sc);
-        return CLI_FAIL;
-    }
-    warn_initial_overlap(o.scenario, m, d);
-    warn_fast_spin(o.scenario, sc);
-    /* the scenario's built-in controller ([control], docs/capture.md) */
-    if (sc->control && !(ctl = cd_ctrl_create(m, sc->control, &err))) {
-        cli_error("%s: %s", o.scenario, err.msg);
-        cd_data_free(d);
-        cd_ctrl_free(ctl);
-        cd_scenario_free(sc);
-        return CLI_FAIL;
-    }
-    if (ctl) cd_ctrl_install(ctl, d);
     /* Signals are caught before the results file exists, so that a SIGINT
      * while it is being created still ends with a closed file. SIGXFSZ
      * (file size limit, ulimit -f) would kill the process in the middle of
      * an HDF5 write: ignored, the write fails with EFBIG and is reported. */
-    memset(&sa, 0, sizeof sa);
-    sa.sa_handler = on_signal;
-    sigemptyset(&sa.sa_mask);
-    sigaction(SIGINT, &sa, &old_int);
-    sigaction(SIGTERM, &sa, &old_term);
-    sa.sa_handler = SIG_IGN;
-    sigaction(SIGXFSZ, &sa, &old_xfsz);
-    /* a run started with these blocked (inherited mask) still stops on them;
-     * one already pending is delivered here and stops the run at its start */
-    sigemptyset(&unblock);
-    sigaddset(&unblock, SIGINT);
-    sigaddset(&unblock, SIGTERM);
-    sigprocmask(SIG_UNBLOCK, &unblock, &old_mask);
+    catch_signals(&old_int, &old_term, &old_xfsz, &old_mask);
 
     /* the results file first: an unwritable path fails before any work */
     w = cd_h5_create(out, m, sc, &err);
@@ -605,31 +666,7 @@ int cmd_run(int argc, char **argv)
     else if (st == CD_EINTERRUPT && g_signal) exitc = CLI_INTERRUPT;
     else exitc = CLI_FAIL;
 
-    if (!wmsg[0] && !o.quiet) {
-        cd_error rerr;
-        cd_h5r *r = cd_h5r_open(out, &rerr);
-        if (r) {
-            cli_run_extra x;
-            x.wall = ctx.wall0;
-            x.fn_max = ctx.fn_max;
-            x.ft_max = ctx.ft_max;
-            cli_report(stdout, r, out, &x);
-            cd_h5r_close(r);
-        } else {
-            cli_error("reading back '%s': %s", out, rerr.msg);
-        }
-    }
-    fflush(stdout);
-    if (wmsg[0]) {
-        /* one line: the first write error (it names the file and what failed) */
-        if (st != CD_OK && st != CD_EIO)
-            cli_error("run failed (%s): %s", cd_status_string(st), msg);
-        cli_error("%s (simulation at t = %.9g s)", wmsg, d->t);
-    } else if (exitc == CLI_INTERRUPT)
-        fprintf(stderr, "capdyn: %s; results up to t = %.9g s kept in '%s'\n", msg, d->t, out);
-    else if (exitc != CLI_OK)
-        cli_error("run failed (%s): %s; results up to t = %.9g s kept in '%s'", cd_status_string(st), msg, d->t,
-                  out);
+    run_report(&o, out, &ctx, d, st, exitc, msg, wmsg);
     free(ctx.fn_max);
     free(ctx.ft_max);
     cd_data_free(d);

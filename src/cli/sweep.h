@@ -1,11 +1,23 @@
-/* capdyn sweep: the plan of a sweep, one variant's outcome, the summary file
- * (docs/sweep.md). Internal to src/cli. */
+/* capdyn sweep: declarations shared by its files (docs/sweep.md; the
+ * layout of src/cli is in docs/cli.md, "Source layout"):
+ *   sweep.c         the command: options, the driver
+ *   sweep_plan.c    the plan: --vary specs, grid and Latin hypercube, region
+ *   sweep_run.c     running the variants: worker processes, MPI ranks
+ *   sweep_h5.c      the summary file: writing (with its lock), reading
+ *   sweep_report.c  what is printed: progress bar, end report, --table
+ * Internal to src/cli. */
 #ifndef CD_CLI_SWEEP_H
 #define CD_CLI_SWEEP_H
 
 #include "cli.h"
 
+#include <signal.h>
+
 #define SW_MAX_KEYS 4
+#define SW_MAX_JOBS 1024
+/* Seconds of wall time between two summary checkpoints: a sweep killed
+ * without a chance to write (SIGKILL, power) loses at most this much work. */
+#define SW_CHECKPOINT 10.0
 #define SW_MAX_VARIANTS 10000000L /* the largest sweep (summary rows) */
 #define SW_REASON 512             /* bytes of a failure reason */
 
@@ -67,16 +79,63 @@ typedef struct {
 
 void sw_result_blank(sw_result *r, long index);
 
-/* Writes the summary to path (a temporary file in its directory, renamed
- * onto path). jobs and total_wall go to /timing. 0 or -1 with msg. */
-int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
+/* The summary's place on disk, held for the whole sweep (docs/reliability.md,
+ * "Sweeps"): the same protocol as a results file of capdyn run (src/io/h5.c,
+ * claim_output): the target is never an input file (same device and inode)
+ * nor anything but a regular file; a file another capdyn process writes is
+ * flock'ed by it and refused; each write goes to a temporary file in the
+ * target's directory, flock'ed, renamed onto the target under a lock on the
+ * directory, and keeps its lock (so capdyn run -o, or a second sweep with
+ * the same -o, refuses the summary while this sweep runs). */
+typedef struct {
+    char *path;               /* as given */
+    char *target;             /* the file replaced (a symbolic link followed) */
+    int lock_fd;              /* our flock'ed summary, -1 before the first write */
+} sw_out;
+
+/* Checks path as the summary of a sweep whose inputs are the ninput files
+ * input (the scenario); 0, or -1 with msg (out is then empty). */
+int sw_out_open(sw_out *out, const char *path, const char *const *input, int ninput, char *msg, size_t len);
+void sw_out_close(sw_out *out);
+
+/* Writes the summary to out (a temporary file in its directory, renamed
+ * onto it). jobs and total_wall go to /timing. 0 or -1 with msg. */
+int sw_summary_write(sw_out *out, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
                      double total_wall, char *msg, size_t len);
-/* Reads the results of a summary written for the same sweep into res
- * (nvar entries, blanked first); -1 with msg if it cannot be read or was
- * made by another sweep (msg names what differs). */
-int sw_summary_read(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res, char *msg, size_t len);
-/* Prints a summary as columns for gnuplot (capdyn sweep --table). */
-int sw_summary_table(const char *path, FILE *out, char *msg, size_t len);
+/* A summary file as read back (everything but the units): what --table
+ * prints and --resume continues. Strings and arrays owned (sw_summary_free). */
+typedef struct {
+    long long version;        /* format_version */
+    char *capdyn_version, *scenario, *scenario_text, *overrides, *design;
+    long long lhs_samples, seed, nvar, nrun, nfail, complete, until_verdict;
+    double length;            /* [m] 0: none */
+    int nkey;
+    char **names, **specs;    /* nkey */
+    char **vals;              /* nvar x nkey TOML values */
+    double *num;              /* nvar x nkey, NaN where not a number */
+    sw_result *res;           /* nvar (wall from /timing) */
+    long nslice;              /* region slices (0: no /region) */
+    char **slice;
+    double *area;
+    long long *captured;
+    long long jobs;
+    double total_wall;
+} sw_summary;
+
+/* Reads a summary (every size checked against the file before anything is
+ * allocated; the checksums of format_version 2 verified). Run it in a child
+ * process (cli_isolated): HDF5 may crash on a damaged file. 0, or -1 with
+ * msg naming path and what is wrong (s is then freed). */
+int sw_summary_load(const char *path, sw_summary *s, char *msg, size_t len);
+void sw_summary_free(sw_summary *s);
+/* The results of a summary made by the same sweep (meta, p) into res (nvar
+ * entries), read in a child process with a time limit; 0, or -1 after one
+ * error line (the file is damaged, or was made by another sweep: the
+ * message names what differs). */
+int sw_summary_resume(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res);
+/* capdyn sweep --table: prints a summary as columns for gnuplot on stdout,
+ * read in a child process with a time limit; an exit status. */
+int sw_summary_table(const char *path);
 
 /* Normalised region areas of a grid over at least two numeric ranges (the
  * first two are the plane): for each combination of the other keys' values,
@@ -85,5 +144,69 @@ int sw_summary_table(const char *path, FILE *out, char *msg, size_t len);
  * label SW_LABEL bytes) may be NULL to count. */
 #define SW_LABEL 256
 long sw_region(const sw_plan *p, const sw_result *res, double length, double *area, long *ncap, char *label);
+
+/* The command line of a sweep (sweep.c). */
+typedef struct {
+    const char *scenario, *output, *keep_dir, *table;
+    const char **sets;
+    int nsets;
+    const char *vary[SW_MAX_KEYS + 1];
+    int nvary;
+    long lhs, jobs;
+    unsigned long long seed;
+    int quiet, resume, have_jobs, until_verdict;
+    double length;
+} sw_opts;
+
+/* What a variant needs (constant while the sweep runs). */
+typedef struct {
+    const sw_opts *o;
+    const sw_plan *p;
+    sw_out *out;    /* the summary (rank 0 / the parent only) */
+} sw_ctx;
+
+/* ---- sweep_plan.c ---- */
+/* The plan of --vary texts vary (nvary), a grid or (lhs > 0) a Latin
+ * hypercube of lhs variants with seed: p filled (free with sw_plan_free).
+ * CLI_OK, or the exit status after one error line (usage: CLI_USAGE). */
+int sw_plan_make(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed);
+void sw_plan_free(sw_plan *p);
+/* The --set list of variant idx: the nsets base overrides, then KEY=VALUE
+ * of each swept key; NULL-terminated, malloc'd (sw_overrides_free). NULL
+ * if out of memory. */
+char **sw_overrides(const char *const *sets, int nsets, const sw_plan *p, long idx);
+void sw_overrides_free(char **ov);
+
+/* ---- sweep_run.c ---- */
+/* Runs variant idx in this process into r (its failure recorded in r). */
+void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r);
+
+/* The progress bar (sweep_report.c). */
+typedef struct {
+    int on, drawn;
+    double t0, last;
+    long total, done0; /* done0: finished before this invocation (resume) */
+} sw_progress;
+
+/* Runs the variants not yet run (status SW_NOT_RUN) on nj worker processes
+ * (size 1) or, under MPI, on the size - 1 other ranks; SIGINT and SIGTERM
+ * stop it (the variants in flight are then not run), SIGPIPE is ignored
+ * meanwhile; checkpoints the summary every SW_CHECKPOINT s. Returns 0, the
+ * signal that stopped it, or -1 on an error (reported). */
+int sw_run(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int nj, int size, sw_progress *pg, long *ndone,
+           long *nfail, double wall0);
+#ifdef CAPDYN_MPI
+/* Started by an MPI launcher? */
+int sw_under_mpi(void);
+/* A worker rank: runs what rank 0 hands out until told to stop. */
+void sw_mpi_worker(const sw_ctx *cx);
+#endif
+
+/* ---- sweep_report.c ---- */
+void sw_draw(sw_progress *pg, long done, long failed, int force);
+void sw_clear(sw_progress *pg);
+/* The end-of-sweep lines on stdout: counts, regions, failed variants. */
+void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, long ndone, long nfail, long nrun0,
+                   double wall, int nj);
 
 #endif

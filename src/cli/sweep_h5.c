@@ -6,20 +6,35 @@
  * rows are in variant order and every deterministic value is written from
  * the variants' results alone, so that the same sweep gives the same
  * summary for any -j or number of MPI ranks; wall times are in /timing
- * only. Objects are created without time stamps. */
+ * only. Objects are created without time stamps. The target is checked and
+ * locked as a results file of capdyn run is (sw_out), and every value is
+ * covered by a checksum (below).
+ *
+ * Read back (--table, --resume) by sw_summary_load in a child process with
+ * a time limit (cli_isolated): every size is checked against the file
+ * before anything is allocated, and the checksum is verified, so that a
+ * damaged file gives one error line, never a crash, a hang or other values
+ * (docs/reliability.md, "Sweeps"). */
+#define _DEFAULT_SOURCE /* flock */
 #define _POSIX_C_SOURCE 200809L
 #include "sweep.h"
 #include "capdyn/model.h"
 
+#include <errno.h>
+#include <fcntl.h>
 #include <hdf5.h>
+#include <libgen.h>
 #include <math.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/file.h>
+#include <sys/mman.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 #define SW_FORMAT "capdyn-sweep"
-#define SW_FORMAT_VERSION 1
+#define SW_FORMAT_VERSION 2 /* 2: checksums (1: none, still read) */
 
 void sw_result_blank(sw_result *r, long index)
 {
@@ -34,6 +49,29 @@ void sw_result_blank(sw_result *r, long index)
     r->n_stick = r->n_slip = -1;
 }
 
+/* ---- the checksum ------------------------------------------------------------ */
+/* HDF5 checks no raw data (and, in the 1.8 file format the summary uses,
+ * not every header): a flipped bit in a value would be read back as another
+ * value. The summary carries its own checksum: FNV-1a (64 bit) over the
+ * name and the value of every attribute and dataset in the order they are
+ * written (numbers as the 8 bytes of their long long or double in memory,
+ * strings with their terminating zero), stored as the root attribute
+ * "checksum"; /timing has its own, so that the root one is the same for
+ * any -j. FNV-1a maps each byte through a bijection of its 64-bit state,
+ * so a change of any one byte always changes it (docs/sweep.md). */
+#define DG_INIT 0xcbf29ce484222325ULL
+static void dg_bytes(unsigned long long *h, const void *v, size_t n)
+{
+    const unsigned char *b = v;
+    size_t i;
+    if (!h) return;
+    for (i = 0; i < n; i++) {
+        *h ^= b[i];
+        *h *= 0x100000001b3ULL;
+    }
+}
+static void dg_str(unsigned long long *h, const char *s) { dg_bytes(h, s ? s : "", strlen(s ? s : "") + 1); }
+
 /* ---- writing -------------------------------------------------------------- */
 
 static hid_t str_type(void)
@@ -44,10 +82,12 @@ static hid_t str_type(void)
     return t;
 }
 
-static int attr_str(hid_t loc, const char *name, const char *v)
+static int attr_str(hid_t loc, const char *name, const char *v, unsigned long long *h)
 {
     hid_t t = str_type(), s = H5Screate(H5S_SCALAR), a;
     int rc = -1;
+    dg_str(h, name);
+    dg_str(h, v);
     a = H5Acreate2(loc, name, t, s, H5P_DEFAULT, H5P_DEFAULT);
     if (a >= 0) {
         rc = H5Awrite(a, t, &v) < 0 ? -1 : 0;
@@ -70,28 +110,39 @@ static int attr_num(hid_t loc, const char *name, hid_t mem, hid_t file, const vo
     H5Sclose(s);
     return rc;
 }
-static int attr_d(hid_t loc, const char *name, double v) { return attr_num(loc, name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, &v); }
-static int attr_l(hid_t loc, const char *name, long v)
+static int attr_d(hid_t loc, const char *name, double v, unsigned long long *h)
+{
+    dg_str(h, name);
+    dg_bytes(h, &v, sizeof v);
+    return attr_num(loc, name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, &v);
+}
+static int attr_l(hid_t loc, const char *name, long v, unsigned long long *h)
 {
     long long x = v;
+    dg_str(h, name);
+    dg_bytes(h, &x, sizeof x);
     return attr_num(loc, name, H5T_NATIVE_LLONG, H5T_STD_I64LE, &x);
 }
 
 /* a dataset of rank 1 or 2 (cols 0: rank 1), no time stamps */
 static int dset(hid_t loc, const char *name, hid_t mem, hid_t file, long rows, int cols, const void *data,
-                const char *units)
+                const char *units, unsigned long long *h)
 {
     hsize_t dims[2];
     hid_t s, d, dcpl = H5Pcreate(H5P_DATASET_CREATE);
     int rc = -1;
     dims[0] = (hsize_t)rows;
     dims[1] = (hsize_t)cols;
+    if (h && H5Tget_class(mem) != H5T_STRING) { /* numbers: 8 bytes each; strings: dset_str */
+        dg_str(h, name);
+        dg_bytes(h, data, 8 * (size_t)rows * (size_t)(cols ? cols : 1));
+    }
     H5Pset_obj_track_times(dcpl, 0);
     s = H5Screate_simple(cols ? 2 : 1, dims, NULL);
     d = H5Dcreate2(loc, name, file, s, H5P_DEFAULT, dcpl, H5P_DEFAULT);
     if (d >= 0) {
         rc = rows == 0 || H5Dwrite(d, mem, H5S_ALL, H5S_ALL, H5P_DEFAULT, data) >= 0 ? 0 : -1;
-        if (rc == 0 && units) rc = attr_str(d, "units", units);
+        if (rc == 0 && units) rc = attr_str(d, "units", units, NULL);
         H5Dclose(d);
     }
     H5Sclose(s);
@@ -99,10 +150,14 @@ static int dset(hid_t loc, const char *name, hid_t mem, hid_t file, long rows, i
     return rc;
 }
 
-static int dset_str(hid_t loc, const char *name, long rows, int cols, const char *const *v)
+static int dset_str(hid_t loc, const char *name, long rows, int cols, const char *const *v, unsigned long long *h)
 {
     hid_t t = str_type();
-    int rc = dset(loc, name, t, t, rows, cols, v, NULL);
+    size_t i;
+    int rc;
+    dg_str(h, name);
+    for (i = 0; i < (size_t)rows * (size_t)(cols ? cols : 1); i++) dg_str(h, v[i]);
+    rc = dset(loc, name, t, t, rows, cols, v, NULL, NULL);
     H5Tclose(t);
     return rc;
 }
@@ -141,78 +196,12 @@ static const sw_col lcols[] = {
 };
 #define NCOL(a) (sizeof a / sizeof a[0])
 
-static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
-                      double total_wall)
+/* /region (sw_region) of a grid over two ranges; nothing otherwise. */
+static int write_region(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, unsigned long long *h)
 {
-    long n = p->nvar, i, nrun = 0, nfail = 0, nslice, s;
-    int k, rc = 0;
-    size_t c;
-    double *dbuf = malloc(sizeof(double) * (size_t)(3 * n + 1));
-    long long *lbuf = malloc(sizeof(long long) * (size_t)(n + 1));
-    const char **names = NULL, **specs = NULL, **reasons = NULL;
-    double *num = malloc(sizeof(double) * (size_t)(n * p->nkey + 1));
+    long nslice = sw_region(p, res, meta->length, NULL, NULL, NULL), s;
+    int rc = 0;
     hid_t g;
-    if (!dbuf || !lbuf || !num) {
-        rc = -1;
-        goto out;
-    }
-    for (i = 0; i < n; i++) {
-        if (res[i].status != SW_NOT_RUN) nrun++;
-        if (res[i].status != SW_NOT_RUN && res[i].status != 0) nfail++;
-    }
-    rc |= attr_str(f, "format", SW_FORMAT);
-    rc |= attr_l(f, "format_version", SW_FORMAT_VERSION);
-    rc |= attr_str(f, "capdyn_version", cd_version());
-    rc |= attr_str(f, "scenario", meta->scenario);
-    rc |= attr_str(f, "scenario_text", meta->scenario_text);
-    rc |= attr_str(f, "overrides", meta->overrides);
-    rc |= attr_str(f, "design", p->lhs ? "lhs" : "grid");
-    rc |= attr_l(f, "lhs_samples", p->lhs ? p->lhs_n : 0);
-    rc |= attr_l(f, "seed", (long)p->seed);
-    rc |= attr_l(f, "n_variants", n);
-    rc |= attr_l(f, "n_run", nrun);
-    rc |= attr_l(f, "n_failed", nfail);
-    rc |= attr_l(f, "complete", nrun == n);
-    rc |= attr_d(f, "length", meta->length);
-    rc |= attr_l(f, "until_verdict", meta->until_verdict);
-
-    names = malloc(sizeof *names * (size_t)p->nkey);
-    specs = malloc(sizeof *specs * (size_t)p->nkey);
-    reasons = malloc(sizeof *reasons * (size_t)(n + 1));
-    if (!names || !specs || !reasons) {
-        rc = -1;
-        goto out;
-    }
-    for (k = 0; k < p->nkey; k++) {
-        names[k] = p->key[k].key;
-        specs[k] = p->key[k].spec;
-    }
-    rc |= dset_str(f, "param_names", p->nkey, 0, names);
-    rc |= dset_str(f, "param_specs", p->nkey, 0, specs);
-    rc |= dset_str(f, "param_values", n, p->nkey, (const char *const *)p->val);
-    for (i = 0; i < n * p->nkey; i++)
-        if (cli_number(p->val[i], &num[i]) != 0) num[i] = NAN;
-    rc |= dset(f, "param_numeric", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, p->nkey, num, NULL);
-
-    for (c = 0; c < NCOL(icols); c++) {
-        for (i = 0; i < n; i++) lbuf[i] = *(const int *)((const char *)&res[i] + icols[c].off);
-        rc |= dset(f, icols[c].name, H5T_NATIVE_LLONG, c == 1 ? H5T_STD_I8LE : H5T_STD_I32LE, n, 0, lbuf, NULL);
-    }
-    for (c = 0; c < NCOL(lcols); c++) {
-        for (i = 0; i < n; i++) lbuf[i] = *(const long *)((const char *)&res[i] + lcols[c].off);
-        rc |= dset(f, lcols[c].name, H5T_NATIVE_LLONG, H5T_STD_I64LE, n, 0, lbuf, NULL);
-    }
-    for (c = 0; c < NCOL(dcols); c++) {
-        for (i = 0; i < n; i++) dbuf[i] = *(const double *)((const char *)&res[i] + dcols[c].off);
-        rc |= dset(f, dcols[c].name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 0, dbuf, dcols[c].units);
-    }
-    for (i = 0; i < n; i++) reasons[i] = res[i].reason;
-    rc |= dset_str(f, "failure", n, 0, reasons);
-    for (i = 0; i < n; i++) memcpy(dbuf + 3 * i, res[i].offset, sizeof res[i].offset);
-    rc |= dset(f, "offset", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 3, dbuf, "m");
-
-    /* the graspable region of each slice of a grid over two ranges */
-    nslice = sw_region(p, res, meta->length, NULL, NULL, NULL);
     if (nslice > 0) {
         double *area = malloc(sizeof(double) * (size_t)nslice);
         long *ncap = malloc(sizeof(long) * (size_t)nslice);
@@ -222,12 +211,12 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
             long long *lc = malloc(sizeof(long long) * (size_t)nslice);
             sw_region(p, res, meta->length, area, ncap, lab);
             for (s = 0; s < nslice; s++) labp[s] = lab + s * SW_LABEL;
-            rc |= dset_str(g, "slice", nslice, 0, labp);
+            rc |= dset_str(g, "slice", nslice, 0, labp, h);
             rc |= dset(g, "area", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, nslice, 0, area,
-                       meta->length > 0 ? "1 (m^2 / length^2)" : "m^2");
+                       meta->length > 0 ? "1 (m^2 / length^2)" : "m^2", h);
             if (lc) {
                 for (s = 0; s < nslice; s++) lc[s] = ncap[s];
-                rc |= dset(g, "captured", H5T_NATIVE_LLONG, H5T_STD_I64LE, nslice, 0, lc, NULL);
+                rc |= dset(g, "captured", H5T_NATIVE_LLONG, H5T_STD_I64LE, nslice, 0, lc, NULL, h);
                 free(lc);
             } else
                 rc = -1;
@@ -239,17 +228,100 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
         free(lab);
         free(labp);
     }
+    return rc;
+}
+
+/* Everything but the file's creation; 0, -1 (an HDF5 call failed: disk
+ * full, quota, file size limit, I/O) or -2 (out of memory). */
+static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
+                      double total_wall)
+{
+    long n = p->nvar, i, nrun = 0, nfail = 0;
+    int k, rc = 0;
+    size_t c;
+    double *dbuf = malloc(sizeof(double) * (size_t)(3 * n + 1));
+    long long *lbuf = malloc(sizeof(long long) * (size_t)(n + 1));
+    const char **names = NULL, **specs = NULL, **reasons = NULL;
+    double *num = malloc(sizeof(double) * (size_t)(n * p->nkey + 1));
+    hid_t g;
+    unsigned long long h = DG_INIT, ht = DG_INIT;
+    char sum[40];
+    if (!dbuf || !lbuf || !num) {
+        rc = -2; /* out of memory */
+        goto out;
+    }
+    for (i = 0; i < n; i++) {
+        if (res[i].status != SW_NOT_RUN) nrun++;
+        if (res[i].status != SW_NOT_RUN && res[i].status != 0) nfail++;
+    }
+    rc |= attr_str(f, "format", SW_FORMAT, &h);
+    rc |= attr_l(f, "format_version", SW_FORMAT_VERSION, &h);
+    rc |= attr_str(f, "capdyn_version", cd_version(), &h);
+    rc |= attr_str(f, "scenario", meta->scenario, &h);
+    rc |= attr_str(f, "scenario_text", meta->scenario_text, &h);
+    rc |= attr_str(f, "overrides", meta->overrides, &h);
+    rc |= attr_str(f, "design", p->lhs ? "lhs" : "grid", &h);
+    rc |= attr_l(f, "lhs_samples", p->lhs ? p->lhs_n : 0, &h);
+    rc |= attr_l(f, "seed", (long)p->seed, &h);
+    rc |= attr_l(f, "n_variants", n, &h);
+    rc |= attr_l(f, "n_run", nrun, &h);
+    rc |= attr_l(f, "n_failed", nfail, &h);
+    rc |= attr_l(f, "complete", nrun == n, &h);
+    rc |= attr_d(f, "length", meta->length, &h);
+    rc |= attr_l(f, "until_verdict", meta->until_verdict, &h);
+
+    names = malloc(sizeof *names * (size_t)p->nkey);
+    specs = malloc(sizeof *specs * (size_t)p->nkey);
+    reasons = malloc(sizeof *reasons * (size_t)(n + 1));
+    if (!names || !specs || !reasons) {
+        rc = -2;
+        goto out;
+    }
+    for (k = 0; k < p->nkey; k++) {
+        names[k] = p->key[k].key;
+        specs[k] = p->key[k].spec;
+    }
+    rc |= dset_str(f, "param_names", p->nkey, 0, names, &h);
+    rc |= dset_str(f, "param_specs", p->nkey, 0, specs, &h);
+    rc |= dset_str(f, "param_values", n, p->nkey, (const char *const *)p->val, &h);
+    for (i = 0; i < n * p->nkey; i++)
+        if (cli_number(p->val[i], &num[i]) != 0) num[i] = NAN;
+    rc |= dset(f, "param_numeric", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, p->nkey, num, NULL, &h);
+
+    for (c = 0; c < NCOL(icols); c++) {
+        for (i = 0; i < n; i++) lbuf[i] = *(const int *)((const char *)&res[i] + icols[c].off);
+        rc |= dset(f, icols[c].name, H5T_NATIVE_LLONG, c == 1 ? H5T_STD_I8LE : H5T_STD_I32LE, n, 0, lbuf, NULL, &h);
+    }
+    for (c = 0; c < NCOL(lcols); c++) {
+        for (i = 0; i < n; i++) lbuf[i] = *(const long *)((const char *)&res[i] + lcols[c].off);
+        rc |= dset(f, lcols[c].name, H5T_NATIVE_LLONG, H5T_STD_I64LE, n, 0, lbuf, NULL, &h);
+    }
+    for (c = 0; c < NCOL(dcols); c++) {
+        for (i = 0; i < n; i++) dbuf[i] = *(const double *)((const char *)&res[i] + dcols[c].off);
+        rc |= dset(f, dcols[c].name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 0, dbuf, dcols[c].units, &h);
+    }
+    for (i = 0; i < n; i++) reasons[i] = res[i].reason;
+    rc |= dset_str(f, "failure", n, 0, reasons, &h);
+    for (i = 0; i < n; i++) memcpy(dbuf + 3 * i, res[i].offset, sizeof res[i].offset);
+    rc |= dset(f, "offset", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 3, dbuf, "m", &h);
+
+    /* the graspable region of each slice of a grid over two ranges */
+    rc |= write_region(f, meta, p, res, &h);
 
     /* what differs between runs of the same sweep */
     g = group(f, "timing");
     if (g >= 0) {
         for (i = 0; i < n; i++) dbuf[i] = res[i].wall;
-        rc |= dset(g, "wall", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 0, dbuf, "s");
-        rc |= attr_l(g, "jobs", jobs);
-        rc |= attr_d(g, "total_wall", total_wall);
+        rc |= dset(g, "wall", H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, n, 0, dbuf, "s", &ht);
+        rc |= attr_l(g, "jobs", jobs, &ht);
+        rc |= attr_d(g, "total_wall", total_wall, &ht);
+        snprintf(sum, sizeof sum, "fnv1a64:%016llx", ht);
+        rc |= attr_str(g, "checksum", sum, NULL);
         H5Gclose(g);
     } else
         rc = -1;
+    snprintf(sum, sizeof sum, "fnv1a64:%016llx", h);
+    rc |= attr_str(f, "checksum", sum, NULL);
 out:
     free(dbuf);
     free(lbuf);
@@ -260,23 +332,135 @@ out:
     return rc;
 }
 
-int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
-                     double total_wall, char *msg, size_t len)
+/* ---- where the summary goes ------------------------------------------------ */
+
+static int same_file(const struct stat *a, const struct stat *b) { return a->st_dev == b->st_dev && a->st_ino == b->st_ino; }
+
+int sw_out_open(sw_out *out, const char *path, const char *const *input, int ninput, char *msg, size_t len)
 {
-    size_t n = strlen(path);
-    char *tmp = malloc(n + 64);
-    const char *slash = strrchr(path, '/');
-    hid_t fapl, fcpl, f;
-    int rc;
-    if (!tmp) {
+    struct stat st, si;
+    int i;
+    out->path = out->target = NULL;
+    out->lock_fd = -1;
+    if (lstat(path, &st) == 0 && S_ISLNK(st.st_mode)) {
+        out->target = realpath(path, NULL);
+        if (!out->target) {
+            snprintf(msg, len, "cannot write the sweep summary '%s': it is a symbolic link to a missing file", path);
+            return -1;
+        }
+    } else if ((out->target = malloc(strlen(path) + 1)) != NULL)
+        strcpy(out->target, path);
+    out->path = malloc(strlen(path) + 1);
+    if (!out->target || !out->path) {
+        sw_out_close(out);
         snprintf(msg, len, "out of memory");
         return -1;
     }
-    /* .NAME.tmp-PID in the target's directory */
-    if (slash)
-        sprintf(tmp, "%.*s/.%s.tmp-%ld", (int)(slash - path), path, slash + 1, (long)getpid());
-    else
-        sprintf(tmp, ".%s.tmp-%ld", path, (long)getpid());
+    strcpy(out->path, path);
+    if (stat(out->target, &st) != 0) return 0; /* a new file */
+    if (S_ISDIR(st.st_mode)) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': it is a directory", path);
+        goto fail;
+    }
+    if (!S_ISREG(st.st_mode)) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': it exists and is not a regular file", path);
+        goto fail;
+    }
+    for (i = 0; i < ninput; i++)
+        if (input[i] && stat(input[i], &si) == 0 && same_file(&si, &st)) {
+            snprintf(msg, len, "cannot write the sweep summary to '%s': it is the scenario file '%s' (choose another -o)",
+                     path, input[i]);
+            goto fail;
+        }
+    return 0;
+fail:
+    sw_out_close(out);
+    return -1;
+}
+
+void sw_out_close(sw_out *out)
+{
+    if (out->lock_fd >= 0) close(out->lock_fd);
+    out->lock_fd = -1;
+    free(out->path);
+    free(out->target);
+    out->path = out->target = NULL;
+}
+
+/* The temporary file of the next write, created and flock'ed in the
+ * target's directory (dir_fd locked by the caller); checks that the target
+ * is still ours or free. Returns its descriptor, -1 with msg. */
+static int claim_tmp(sw_out *out, char *tmp, size_t tlen, char *msg, size_t len)
+{
+    struct stat st, mine;
+    const char *slash = strrchr(out->target, '/');
+    int fd = -1, i;
+    if (stat(out->target, &st) == 0) {
+        if (!S_ISREG(st.st_mode)) {
+            snprintf(msg, len, "cannot write the sweep summary '%s': it exists and is not a regular file", out->path);
+            return -1;
+        }
+        if (out->lock_fd < 0 || fstat(out->lock_fd, &mine) != 0 || !same_file(&mine, &st)) {
+            int probe = open(out->target, O_RDONLY | O_NOCTTY | O_CLOEXEC);
+            if (probe >= 0) {
+                int busy = flock(probe, LOCK_EX | LOCK_NB) != 0 && errno == EWOULDBLOCK;
+                close(probe);
+                if (busy) {
+                    snprintf(msg, len,
+                             "cannot write the sweep summary '%s': another capdyn process is writing it (the file is "
+                             "locked); choose another -o or wait for it to end",
+                             out->path);
+                    return -1;
+                }
+            }
+        }
+    }
+    for (i = 0; i < 100; i++) {
+        if (slash)
+            snprintf(tmp, tlen, "%.*s/.%s.tmp-%ld-%d", (int)(slash - out->target), out->target, slash + 1,
+                     (long)getpid(), i);
+        else
+            snprintf(tmp, tlen, ".%s.tmp-%ld-%d", out->target, (long)getpid(), i);
+        fd = open(tmp, O_RDWR | O_CREAT | O_EXCL | O_NOCTTY | O_CLOEXEC, 0666);
+        if (fd >= 0 || errno != EEXIST) break;
+    }
+    if (fd < 0) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': creating a temporary file in its directory: %s",
+                 out->path, strerror(errno));
+        return -1;
+    }
+    (void)flock(fd, LOCK_EX | LOCK_NB);
+    return fd;
+}
+
+int sw_summary_write(sw_out *out, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
+                     double total_wall, char *msg, size_t len)
+{
+    size_t n = strlen(out->target);
+    char *tmp = malloc(n + 64), *dcopy = malloc(n + 1);
+    hid_t fapl, fcpl, f;
+    int rc, dir_fd, fd;
+    if (!tmp || !dcopy) {
+        free(tmp);
+        free(dcopy);
+        snprintf(msg, len, "writing the sweep summary '%s': out of memory", out->path);
+        return -1;
+    }
+    strcpy(dcopy, out->target);
+    dir_fd = open(dirname(dcopy), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+    free(dcopy);
+    if (dir_fd < 0) {
+        snprintf(msg, len, "cannot write the sweep summary '%s': %s", out->path, strerror(errno));
+        free(tmp);
+        return -1;
+    }
+    (void)flock(dir_fd, LOCK_EX); /* best effort: not every file system has it */
+    fd = claim_tmp(out, tmp, n + 64, msg, len);
+    if (fd < 0) {
+        close(dir_fd);
+        free(tmp);
+        return -1;
+    }
     fapl = H5Pcreate(H5P_FILE_ACCESS);
     fcpl = H5Pcreate(H5P_FILE_CREATE);
     H5Pset_file_locking(fapl, 0, 1);
@@ -285,26 +469,37 @@ int sw_summary_write(const char *path, const sw_meta *meta, const sw_plan *p, co
     H5Pclose(fapl);
     H5Pclose(fcpl);
     if (f < 0) {
-        snprintf(msg, len, "cannot create the sweep summary '%s' (temporary '%s')", path, tmp);
-        free(tmp);
-        return -1;
+        snprintf(msg, len, "cannot create the sweep summary '%s' (temporary '%s')", out->path, tmp);
+        rc = -1;
+        goto out;
     }
     H5E_BEGIN_TRY { rc = write_body(f, meta, p, res, jobs, total_wall); } H5E_END_TRY;
-    if (H5Fclose(f) < 0) rc = -1;
+    H5E_BEGIN_TRY { /* a failed flush (disk full) prints pages of diagnostics otherwise */
+        if (H5Fclose(f) < 0 && rc == 0) rc = -1;
+    } H5E_END_TRY;
+    if (rc == -2)
+        snprintf(msg, len, "writing the sweep summary '%s': out of memory; '%s' is left as it was", out->path,
+                 out->path);
+    else if (rc != 0)
+        snprintf(msg, len,
+                 "writing the sweep summary '%s' failed (disk full, quota, file size limit or I/O error); '%s' is "
+                 "left as it was",
+                 out->path, out->path);
+    else if (rename(tmp, out->target) != 0) {
+        snprintf(msg, len, "cannot rename '%s' onto the sweep summary '%s': %s", tmp, out->path, strerror(errno));
+        rc = -1;
+    }
+out:
     if (rc != 0) {
-        snprintf(msg, len, "writing the sweep summary '%s' failed (temporary '%s' removed)", path, tmp);
         unlink(tmp);
-        free(tmp);
-        return -1;
+        close(fd);
+    } else { /* the new summary is ours, the old one is gone */
+        if (out->lock_fd >= 0) close(out->lock_fd);
+        out->lock_fd = fd;
     }
-    if (rename(tmp, path) != 0) {
-        snprintf(msg, len, "cannot rename '%s' onto the sweep summary '%s'", tmp, path);
-        unlink(tmp);
-        free(tmp);
-        return -1;
-    }
+    close(dir_fd);
     free(tmp);
-    return 0;
+    return rc == 0 ? 0 : -1;
 }
 
 /* ---- reading -------------------------------------------------------------- */
@@ -395,124 +590,9 @@ static void free_strs(char **v, size_t n)
 
 static int same(const char *a, const char *b) { return a && b && strcmp(a, b) == 0; }
 
-int sw_summary_read(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res, char *msg, size_t len)
-{
-    hid_t f = open_ro(path);
-    long n = p->nvar, i, nfile = -1;
-    long long nv = -1;
-    int k, rc = -1;
-    size_t c;
-    char *fmt = NULL, *text = NULL, *ov = NULL, *design = NULL, **names = NULL, **vals = NULL, **reasons = NULL;
-    double *dbuf = NULL;
-    long long *lbuf = NULL, seed = -1, uv = -1;
-    if (f < 0) {
-        snprintf(msg, len, "--resume: cannot open the sweep summary '%s'", path);
-        return -1;
-    }
-    fmt = read_attr_str(f, "format");
-    if (!same(fmt, SW_FORMAT)) {
-        snprintf(msg, len, "--resume: '%s' is not a capdyn sweep summary (attribute 'format' is not \"%s\")", path,
-                 SW_FORMAT);
-        goto out;
-    }
-    text = read_attr_str(f, "scenario_text");
-    ov = read_attr_str(f, "overrides");
-    design = read_attr_str(f, "design");
-    if (read_attr_num(f, "n_variants", H5T_NATIVE_LLONG, &nv) == 0) nfile = (long)nv;
-    (void)read_attr_num(f, "seed", H5T_NATIVE_LLONG, &seed);
-    if (!same(text, meta->scenario_text)) {
-        snprintf(msg, len, "--resume: '%s' was made from another scenario text than '%s' (start a new sweep)", path,
-                 meta->scenario);
-        goto out;
-    }
-    if (!same(ov, meta->overrides)) {
-        snprintf(msg, len, "--resume: '%s' was made with other --set overrides ('%s')", path, ov ? ov : "?");
-        goto out;
-    }
-    if (read_attr_num(f, "until_verdict", H5T_NATIVE_LLONG, &uv) != 0 || uv != meta->until_verdict) {
-        snprintf(msg, len, "--resume: '%s' was made %s --until-verdict", path, uv ? "with" : "without");
-        goto out;
-    }
-    if (!same(design, p->lhs ? "lhs" : "grid") || nfile != n || (p->lhs && seed != (long long)p->seed)) {
-        snprintf(msg, len, "--resume: '%s' holds a %s sweep of %ld variants (seed %lld), not this %s sweep of %ld",
-                 path, design ? design : "?", nfile, seed, p->lhs ? "lhs" : "grid", n);
-        goto out;
-    }
-    names = read_strs(f, "param_names", p->nkey, 0);
-    vals = read_strs(f, "param_values", n, p->nkey);
-    if (!names || !vals) {
-        snprintf(msg, len, "--resume: '%s' was made with other --vary keys (%d expected)", path, p->nkey);
-        goto out;
-    }
-    for (k = 0; k < p->nkey; k++)
-        if (!same(names[k], p->key[k].key)) {
-            snprintf(msg, len, "--resume: '%s' varies '%s' as key %d, not '%s'", path, names[k] ? names[k] : "?",
-                     k + 1, p->key[k].key);
-            goto out;
-        }
-    for (i = 0; i < n * p->nkey; i++)
-        if (!same(vals[i], p->val[i])) {
-            snprintf(msg, len, "--resume: '%s': variant %ld has %s=%s, this sweep %s", path, i / p->nkey,
-                     p->key[i % p->nkey].key, vals[i] ? vals[i] : "?", p->val[i]);
-            goto out;
-        }
-    dbuf = malloc(sizeof(double) * (size_t)(3 * n + 1));
-    lbuf = malloc(sizeof(long long) * (size_t)(n + 1));
-    reasons = read_strs(f, "failure", n, 0);
-    if (!dbuf || !lbuf || !reasons) {
-        snprintf(msg, len, "--resume: cannot read '%s' (failure)", path);
-        goto out;
-    }
-    for (i = 0; i < n; i++) sw_result_blank(&res[i], i);
-    for (c = 0; c < NCOL(icols) + NCOL(lcols) + NCOL(dcols); c++) {
-        int isd = c >= NCOL(icols) + NCOL(lcols), isl = !isd && c >= NCOL(icols);
-        const sw_col *col = isd ? &dcols[c - NCOL(icols) - NCOL(lcols)] : isl ? &lcols[c - NCOL(icols)] : &icols[c];
-        if (read_ds(f, col->name, isd ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LLONG, n, 0, isd ? (void *)dbuf : (void *)lbuf)) {
-            snprintf(msg, len, "--resume: cannot read '%s' (%s)", path, col->name);
-            goto out;
-        }
-        for (i = 0; i < n; i++) {
-            char *fp = (char *)&res[i] + col->off;
-            if (isd) *(double *)fp = dbuf[i];
-            else if (isl) *(long *)fp = (long)lbuf[i];
-            else *(int *)fp = (int)lbuf[i];
-        }
-    }
-    {
-        hid_t g;
-        H5E_BEGIN_TRY { g = H5Gopen2(f, "timing", H5P_DEFAULT); } H5E_END_TRY;
-        if (g >= 0) {
-            if (read_ds(g, "wall", H5T_NATIVE_DOUBLE, n, 0, dbuf) == 0)
-                for (i = 0; i < n; i++) res[i].wall = dbuf[i];
-            H5Gclose(g);
-        }
-    }
-    if (read_ds(f, "offset", H5T_NATIVE_DOUBLE, n, 3, dbuf) != 0) {
-        snprintf(msg, len, "--resume: cannot read '%s' (offset)", path);
-        goto out;
-    }
-    for (i = 0; i < n; i++) {
-        memcpy(res[i].offset, dbuf + 3 * i, sizeof res[i].offset);
-        snprintf(res[i].reason, sizeof res[i].reason, "%s", reasons[i] ? reasons[i] : "");
-        if (res[i].status == SW_NOT_RUN) sw_result_blank(&res[i], i);
-    }
-    rc = 0;
-out:
-    free(fmt);
-    free(text);
-    free(ov);
-    free(design);
-    free_strs(names, (size_t)p->nkey);
-    free_strs(vals, (size_t)(n * p->nkey));
-    free_strs(reasons, (size_t)n);
-    free(dbuf);
-    free(lbuf);
-    H5Fclose(f);
-    return rc;
-}
-
-/* rows of a dataset (its first dimension), -1 if absent */
-static long ds_rows(hid_t loc, const char *name)
+/* rows x cols of a dataset's extent (cols 0: rank 1); -1 if absent or of
+ * another rank */
+static long ds_extent(hid_t loc, const char *name, int want_rank, long *cols)
 {
     hid_t d, s;
     hsize_t dims[2] = {0, 0};
@@ -520,115 +600,388 @@ static long ds_rows(hid_t loc, const char *name)
     H5E_BEGIN_TRY { d = H5Dopen2(loc, name, H5P_DEFAULT); } H5E_END_TRY;
     if (d < 0) return -1;
     s = H5Dget_space(d);
-    if (H5Sget_simple_extent_ndims(s) >= 1 && H5Sget_simple_extent_dims(s, dims, NULL) >= 1 &&
-        dims[0] <= (hsize_t)SW_MAX_VARIANTS)
+    if (s >= 0 && H5Sget_simple_extent_ndims(s) == want_rank && H5Sget_simple_extent_dims(s, dims, NULL) == want_rank &&
+        dims[0] <= (hsize_t)SW_MAX_VARIANTS && dims[1] <= (hsize_t)SW_MAX_VARIANTS) {
         n = (long)dims[0];
-    H5Sclose(s);
+        if (cols) *cols = (long)dims[1];
+    }
+    if (s >= 0) H5Sclose(s);
     H5Dclose(d);
     return n;
 }
 
-/* a list value as a gnuplot word: quotes dropped, blanks as '_' */
-static void put_word(FILE *out, const char *v)
+/* strings read back by HDF5 into a malloc'd copy (NULL entries as "") */
+static char **own_strs(char **v, size_t n)
 {
-    size_t n = strlen(v), i;
-    if (n >= 2 && (v[0] == '"' || v[0] == '\'') && v[n - 1] == v[0]) {
-        v++;
-        n -= 2;
+    char **o = v ? calloc(n + 1, sizeof *o) : NULL;
+    size_t i;
+    int ok = o != NULL;
+    for (i = 0; ok && i < n; i++) {
+        const char *x = v[i] ? v[i] : "";
+        if ((o[i] = malloc(strlen(x) + 1)) != NULL) strcpy(o[i], x);
+        else ok = 0;
     }
-    if (n == 0) fputs("\"\"", out);
-    for (i = 0; i < n; i++) fputc(v[i] == ' ' || v[i] == '\t' ? '_' : v[i], out);
+    free_strs(v, v ? n : 0);
+    if (!ok && o) {
+        for (i = 0; i < n; i++) free(o[i]);
+        free(o);
+        o = NULL;
+    }
+    return o;
+}
+static void free_own(char **v, size_t n)
+{
+    size_t i;
+    if (!v) return;
+    for (i = 0; i < n; i++) free(v[i]);
+    free(v);
 }
 
-int sw_summary_table(const char *path, FILE *out, char *msg, size_t len)
+void sw_summary_free(sw_summary *s)
 {
-    hid_t f = open_ro(path), g;
-    long n, nk, i, k, ns;
-    int rc = -1;
-    char *fmt = NULL, **names = NULL, **vals = NULL, **slice = NULL;
-    double *num = NULL, *col[8], length = 0, *area = NULL;
-    long long *verdict = NULL, *status = NULL;
-    static const char *const dnames[8] = {"t_capture", "t_escape", "peak_fn", "peak_tau", "epsilon",
-                                          "fn_step_max", "t_final", NULL};
-    memset(col, 0, sizeof col);
-    if (f < 0) {
-        snprintf(msg, len, "cannot open the sweep summary '%s'", path);
-        return -1;
-    }
-    fmt = read_attr_str(f, "format");
-    nk = ds_rows(f, "param_names");
-    n = ds_rows(f, "status");
-    if (!same(fmt, SW_FORMAT) || nk < 1 || nk > SW_MAX_KEYS || n < 0) {
-        snprintf(msg, len, "'%s' is not a capdyn sweep summary", path);
-        goto out;
-    }
-    (void)read_attr_num(f, "length", H5T_NATIVE_DOUBLE, &length);
-    names = read_strs(f, "param_names", nk, 0);
-    vals = read_strs(f, "param_values", n, (int)nk);
-    num = malloc(sizeof(double) * (size_t)(n * nk + 1));
-    verdict = malloc(sizeof(long long) * (size_t)(n + 1));
-    status = malloc(sizeof(long long) * (size_t)(n + 1));
-    for (k = 0; k < 7; k++) col[k] = malloc(sizeof(double) * (size_t)(n + 1));
-    if (!names || !vals || !num || !verdict || !status || !col[6] ||
-        read_ds(f, "param_numeric", H5T_NATIVE_DOUBLE, n, (int)nk, num) ||
-        read_ds(f, "verdict", H5T_NATIVE_LLONG, n, 0, verdict) || read_ds(f, "status", H5T_NATIVE_LLONG, n, 0, status)) {
-        snprintf(msg, len, "cannot read the sweep summary '%s'", path);
-        goto out;
-    }
-    for (k = 0; k < 7; k++)
-        if (!col[k] || read_ds(f, dnames[k], H5T_NATIVE_DOUBLE, n, 0, col[k])) {
-            snprintf(msg, len, "cannot read the sweep summary '%s' (%s)", path, dnames[k]);
-            goto out;
+    free(s->capdyn_version);
+    free(s->scenario);
+    free(s->scenario_text);
+    free(s->overrides);
+    free(s->design);
+    free_own(s->names, (size_t)s->nkey);
+    free_own(s->specs, (size_t)s->nkey);
+    free_own(s->vals, (size_t)(s->nvar * s->nkey));
+    free(s->num);
+    free(s->res);
+    free_own(s->slice, (size_t)s->nslice);
+    free(s->area);
+    free(s->captured);
+    memset(s, 0, sizeof *s);
+}
+
+/* The checksums of what was read, in the order sw_summary_write feeds them. */
+static void digest(const sw_summary *s, unsigned long long *h, unsigned long long *ht)
+{
+    long i, n = (long)s->nvar;
+    size_t c;
+    long long x;
+    double d;
+    *h = *ht = DG_INIT;
+#define DG_L(name, v) (dg_str(h, name), x = (v), dg_bytes(h, &x, 8))
+    dg_str(h, "format");
+    dg_str(h, SW_FORMAT);
+    DG_L("format_version", s->version);
+    dg_str(h, "capdyn_version");
+    dg_str(h, s->capdyn_version);
+    dg_str(h, "scenario");
+    dg_str(h, s->scenario);
+    dg_str(h, "scenario_text");
+    dg_str(h, s->scenario_text);
+    dg_str(h, "overrides");
+    dg_str(h, s->overrides);
+    dg_str(h, "design");
+    dg_str(h, s->design);
+    DG_L("lhs_samples", s->lhs_samples);
+    DG_L("seed", s->seed);
+    DG_L("n_variants", s->nvar);
+    DG_L("n_run", s->nrun);
+    DG_L("n_failed", s->nfail);
+    DG_L("complete", s->complete);
+    dg_str(h, "length");
+    dg_bytes(h, &s->length, 8);
+    DG_L("until_verdict", s->until_verdict);
+    dg_str(h, "param_names");
+    for (i = 0; i < s->nkey; i++) dg_str(h, s->names[i]);
+    dg_str(h, "param_specs");
+    for (i = 0; i < s->nkey; i++) dg_str(h, s->specs[i]);
+    dg_str(h, "param_values");
+    for (i = 0; i < n * s->nkey; i++) dg_str(h, s->vals[i]);
+    dg_str(h, "param_numeric");
+    dg_bytes(h, s->num, 8 * (size_t)(n * s->nkey));
+    for (c = 0; c < NCOL(icols); c++) {
+        dg_str(h, icols[c].name);
+        for (i = 0; i < n; i++) {
+            x = *(const int *)((const char *)&s->res[i] + icols[c].off);
+            dg_bytes(h, &x, 8);
         }
-    fprintf(out, "# capdyn sweep summary '%s': %ld variants\n", path, n);
-    fprintf(out, "# length %.17g m (keys with \"position\" in their path / length in the *_norm columns; 0: not normalised)\n", length);
+    }
+    for (c = 0; c < NCOL(lcols); c++) {
+        dg_str(h, lcols[c].name);
+        for (i = 0; i < n; i++) {
+            x = *(const long *)((const char *)&s->res[i] + lcols[c].off);
+            dg_bytes(h, &x, 8);
+        }
+    }
+    for (c = 0; c < NCOL(dcols); c++) {
+        dg_str(h, dcols[c].name);
+        for (i = 0; i < n; i++) dg_bytes(h, (const char *)&s->res[i] + dcols[c].off, 8);
+    }
+    dg_str(h, "failure");
+    for (i = 0; i < n; i++) dg_str(h, s->res[i].reason);
+    dg_str(h, "offset");
+    for (i = 0; i < n; i++) dg_bytes(h, s->res[i].offset, 24);
+    if (s->nslice > 0) {
+        dg_str(h, "slice");
+        for (i = 0; i < s->nslice; i++) dg_str(h, s->slice[i]);
+        dg_str(h, "area");
+        dg_bytes(h, s->area, 8 * (size_t)s->nslice);
+        dg_str(h, "captured");
+        dg_bytes(h, s->captured, 8 * (size_t)s->nslice);
+    }
+    dg_str(ht, "wall");
+    for (i = 0; i < n; i++) dg_bytes(ht, &s->res[i].wall, 8);
+    dg_str(ht, "jobs");
+    dg_bytes(ht, &s->jobs, 8);
+    dg_str(ht, "total_wall");
+    d = s->total_wall;
+    dg_bytes(ht, &d, 8);
+#undef DG_L
+}
+
+/* the string attribute name of loc into *v; 0 or -1 */
+static int need_str(hid_t loc, const char *name, char **v)
+{
+    *v = read_attr_str(loc, name);
+    return *v ? 0 : -1;
+}
+
+static int load_body(hid_t f, const char *path, sw_summary *s, char *msg, size_t len)
+{
+    long n, nk, c2 = 0, i;
+    size_t c;
+    double *dbuf = NULL;
+    long long *lbuf = NULL;
+    char *fmt = read_attr_str(f, "format"), *sum = NULL, *sumt = NULL, want[40];
+    struct stat st;
+    unsigned long long h, ht;
+    hid_t g;
+    int rc = -1;
+#define BAD(...)                                                                                                   \
+    do {                                                                                                           \
+        snprintf(msg, len, __VA_ARGS__);                                                                           \
+        goto out;                                                                                                  \
+    } while (0)
+    if (!same(fmt, SW_FORMAT)) BAD("'%s' is not a capdyn sweep summary (attribute 'format' is not \"%s\")", path, SW_FORMAT);
+    if (read_attr_num(f, "format_version", H5T_NATIVE_LLONG, &s->version) != 0 || s->version < 1 ||
+        s->version > SW_FORMAT_VERSION)
+        BAD("'%s': format_version %lld is not one this capdyn reads (1 to %d)", path, s->version, SW_FORMAT_VERSION);
+    if (need_str(f, "capdyn_version", &s->capdyn_version) || need_str(f, "scenario", &s->scenario) ||
+        need_str(f, "scenario_text", &s->scenario_text) || need_str(f, "overrides", &s->overrides) ||
+        need_str(f, "design", &s->design) || read_attr_num(f, "lhs_samples", H5T_NATIVE_LLONG, &s->lhs_samples) ||
+        read_attr_num(f, "seed", H5T_NATIVE_LLONG, &s->seed) ||
+        read_attr_num(f, "n_variants", H5T_NATIVE_LLONG, &s->nvar) ||
+        read_attr_num(f, "n_run", H5T_NATIVE_LLONG, &s->nrun) ||
+        read_attr_num(f, "n_failed", H5T_NATIVE_LLONG, &s->nfail) ||
+        read_attr_num(f, "complete", H5T_NATIVE_LLONG, &s->complete) ||
+        read_attr_num(f, "length", H5T_NATIVE_DOUBLE, &s->length) ||
+        read_attr_num(f, "until_verdict", H5T_NATIVE_LLONG, &s->until_verdict))
+        BAD("'%s': a root attribute of the summary is missing or unreadable (damaged file)", path);
+    /* sizes before any allocation: each variant takes at least the 8 bytes
+     * of its t_final in the file */
+    nk = ds_extent(f, "param_names", 1, NULL);
+    n = ds_extent(f, "status", 1, NULL);
+    if (nk < 1 || nk > SW_MAX_KEYS || n < 0 || s->nvar != n || stat(path, &st) != 0 ||
+        (double)n * 8.0 > (double)st.st_size || ds_extent(f, "param_values", 2, &c2) != n || c2 != nk)
+        BAD("'%s': the sizes of the summary disagree (%lld variants, %ld rows, %ld keys; damaged file)", path, s->nvar,
+            n, nk);
+    s->nkey = (int)nk;
+    s->names = own_strs(read_strs(f, "param_names", nk, 0), (size_t)nk);
+    s->specs = own_strs(read_strs(f, "param_specs", nk, 0), (size_t)nk);
+    s->vals = own_strs(read_strs(f, "param_values", n, (int)nk), (size_t)(n * nk));
+    s->num = malloc(sizeof(double) * (size_t)(n * nk + 1));
+    s->res = malloc(sizeof *s->res * (size_t)(n + 1));
+    dbuf = malloc(sizeof(double) * (size_t)(3 * n + 1));
+    lbuf = malloc(sizeof(long long) * (size_t)(n + 1));
+    if (!s->names || !s->specs || !s->vals || !s->num || !s->res || !dbuf || !lbuf ||
+        read_ds(f, "param_numeric", H5T_NATIVE_DOUBLE, n, (int)nk, s->num))
+        BAD("'%s': cannot read the swept values (damaged file, or out of memory)", path);
+    for (i = 0; i < n; i++) sw_result_blank(&s->res[i], i);
+    for (c = 0; c < NCOL(icols) + NCOL(lcols) + NCOL(dcols); c++) {
+        int isd = c >= NCOL(icols) + NCOL(lcols), isl = !isd && c >= NCOL(icols);
+        const sw_col *col = isd ? &dcols[c - NCOL(icols) - NCOL(lcols)] : isl ? &lcols[c - NCOL(icols)] : &icols[c];
+        if (read_ds(f, col->name, isd ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LLONG, n, 0, isd ? (void *)dbuf : (void *)lbuf))
+            BAD("'%s': cannot read the dataset '%s' (damaged file)", path, col->name);
+        for (i = 0; i < n; i++) {
+            char *fp = (char *)&s->res[i] + col->off;
+            if (isd) *(double *)fp = dbuf[i];
+            else if (isl) *(long *)fp = (long)lbuf[i];
+            else *(int *)fp = (int)lbuf[i];
+        }
+    }
+    {
+        char **why = read_strs(f, "failure", n, 0);
+        if (!why) BAD("'%s': cannot read the dataset 'failure' (damaged file)", path);
+        for (i = 0; i < n; i++) snprintf(s->res[i].reason, sizeof s->res[i].reason, "%s", why[i] ? why[i] : "");
+        free_strs(why, (size_t)n);
+    }
+    if (read_ds(f, "offset", H5T_NATIVE_DOUBLE, n, 3, dbuf) != 0)
+        BAD("'%s': cannot read the dataset 'offset' (damaged file)", path);
+    for (i = 0; i < n; i++) memcpy(s->res[i].offset, dbuf + 3 * i, sizeof s->res[i].offset);
     H5E_BEGIN_TRY { g = H5Gopen2(f, "region", H5P_DEFAULT); } H5E_END_TRY;
     if (g >= 0) {
-        ns = ds_rows(g, "slice");
-        if (ns > 0) {
-            slice = read_strs(g, "slice", ns, 0);
-            area = malloc(sizeof(double) * (size_t)ns);
-            if (slice && area && read_ds(g, "area", H5T_NATIVE_DOUBLE, ns, 0, area) == 0)
-                for (i = 0; i < ns; i++) fprintf(out, "# region %s area %.6g\n", slice[i] ? slice[i] : "", area[i]);
-            free_strs(slice, slice ? (size_t)ns : 0);
-            slice = NULL;
-            free(area);
-            area = NULL;
+        long ns = ds_extent(g, "slice", 1, NULL);
+        if (ns < 1 || ns > n) {
+            H5Gclose(g);
+            BAD("'%s': the region of the summary is damaged", path);
+        }
+        s->nslice = ns;
+        s->slice = own_strs(read_strs(g, "slice", ns, 0), (size_t)ns);
+        s->area = malloc(sizeof(double) * (size_t)ns);
+        s->captured = malloc(sizeof(long long) * (size_t)ns);
+        if (!s->slice || !s->area || !s->captured || read_ds(g, "area", H5T_NATIVE_DOUBLE, ns, 0, s->area) ||
+            read_ds(g, "captured", H5T_NATIVE_LLONG, ns, 0, s->captured)) {
+            H5Gclose(g);
+            BAD("'%s': the region of the summary is damaged", path);
         }
         H5Gclose(g);
     }
-    fputs("# index", out);
-    for (k = 0; k < nk; k++) fprintf(out, " %s", names[k]);
-    for (k = 0; k < nk; k++) fprintf(out, " %s_norm", names[k]);
-    fputs(" verdict status t_capture t_escape peak_fn peak_tau epsilon fn_step_max t_final\n", out);
-    fputs("# verdict: 0 unresolved, 1 captured, 2 escaped, -1 none; status: 0 ok, -1 not run, else failed\n", out);
-    for (i = 0; i < n; i++) {
-        fprintf(out, "%ld", i);
-        for (k = 0; k < nk; k++) {
-            fputc(' ', out);
-            put_word(out, vals[i * nk + k] ? vals[i * nk + k] : "");
-        }
-        for (k = 0; k < nk; k++) {
-            fputc(' ', out);
-            if (isnan(num[i * nk + k])) put_word(out, vals[i * nk + k] ? vals[i * nk + k] : "");
-            else if (length > 0 && names[k] && strstr(names[k], "position"))
-                fprintf(out, "%.17g", num[i * nk + k] / length);
-            else
-                fprintf(out, "%.17g", num[i * nk + k]);
-        }
-        fprintf(out, " %lld %lld", verdict[i], status[i]);
-        for (k = 0; k < 7; k++) fprintf(out, " %.9g", col[k][i]);
-        fputc('\n', out);
+    H5E_BEGIN_TRY { g = H5Gopen2(f, "timing", H5P_DEFAULT); } H5E_END_TRY;
+    if (g < 0) BAD("'%s': the group /timing is missing (damaged file)", path);
+    if (read_ds(g, "wall", H5T_NATIVE_DOUBLE, n, 0, dbuf) || read_attr_num(g, "jobs", H5T_NATIVE_LLONG, &s->jobs) ||
+        read_attr_num(g, "total_wall", H5T_NATIVE_DOUBLE, &s->total_wall)) {
+        H5Gclose(g);
+        BAD("'%s': /timing is damaged", path);
+    }
+    for (i = 0; i < n; i++) s->res[i].wall = dbuf[i];
+    sumt = read_attr_str(g, "checksum");
+    H5Gclose(g);
+    if (s->version >= 2) {
+        digest(s, &h, &ht);
+        sum = read_attr_str(f, "checksum");
+        snprintf(want, sizeof want, "fnv1a64:%016llx", h);
+        if (!same(sum, want))
+            BAD("'%s': the checksum of the summary does not match its contents (the file is damaged)", path);
+        snprintf(want, sizeof want, "fnv1a64:%016llx", ht);
+        if (!same(sumt, want))
+            BAD("'%s': the checksum of /timing does not match its contents (the file is damaged)", path);
     }
     rc = 0;
 out:
+#undef BAD
     free(fmt);
-    free_strs(names, names ? (size_t)nk : 0);
-    free_strs(vals, vals ? (size_t)(n * nk) : 0);
-    free(num);
-    free(verdict);
-    free(status);
-    for (k = 0; k < 7; k++) free(col[k]);
-    H5Fclose(f);
+    free(sum);
+    free(sumt);
+    free(dbuf);
+    free(lbuf);
     return rc;
 }
+
+int sw_summary_load(const char *path, sw_summary *s, char *msg, size_t len)
+{
+    hid_t f;
+    int rc;
+    memset(s, 0, sizeof *s);
+    if (cli_regular_input(path, "sweep summary", msg, len) != 0) return -1;
+    if (access(path, R_OK) != 0) {
+        snprintf(msg, len, "cannot open the sweep summary '%s': %s", path, strerror(errno));
+        return -1;
+    }
+    f = open_ro(path);
+    if (f < 0) {
+        snprintf(msg, len, "cannot open the sweep summary '%s': not an HDF5 file, or damaged", path);
+        return -1;
+    }
+    H5E_BEGIN_TRY { rc = load_body(f, path, s, msg, len); } H5E_END_TRY;
+    H5E_BEGIN_TRY { H5Fclose(f); } H5E_END_TRY;
+    if (rc != 0) sw_summary_free(s);
+    return rc;
+}
+
+/* ---- --resume ---------------------------------------------------------------- */
+
+typedef struct {
+    const char *path;
+    const sw_meta *meta;
+    const sw_plan *p;
+    sw_result *res; /* shared with the parent */
+} resume_job;
+
+/* 0, or -1 with msg: is s the summary of the sweep (meta, p)? */
+static int same_sweep(const sw_summary *s, const char *path, const sw_meta *meta, const sw_plan *p, char *msg,
+                      size_t len)
+{
+    long i, n = p->nvar;
+    int k;
+    if (!same(s->scenario_text, meta->scenario_text)) {
+        snprintf(msg, len, "--resume: '%s' was made from another scenario text than '%s' (start a new sweep)", path,
+                 meta->scenario);
+        return -1;
+    }
+    if (!same(s->overrides, meta->overrides)) {
+        snprintf(msg, len, "--resume: '%s' was made with other --set overrides ('%s')", path, s->overrides);
+        return -1;
+    }
+    if (s->until_verdict != meta->until_verdict) {
+        snprintf(msg, len, "--resume: '%s' was made %s --until-verdict", path, s->until_verdict ? "with" : "without");
+        return -1;
+    }
+    if (!same(s->design, p->lhs ? "lhs" : "grid") || s->nvar != n || (p->lhs && s->seed != (long long)p->seed)) {
+        snprintf(msg, len, "--resume: '%s' holds a %s sweep of %lld variants (seed %lld), not this %s sweep of %ld",
+                 path, s->design, s->nvar, s->seed, p->lhs ? "lhs" : "grid", n);
+        return -1;
+    }
+    if (s->nkey != p->nkey) {
+        snprintf(msg, len, "--resume: '%s' was made with other --vary keys (%d, not %d)", path, s->nkey, p->nkey);
+        return -1;
+    }
+    for (k = 0; k < p->nkey; k++)
+        if (!same(s->names[k], p->key[k].key)) {
+            snprintf(msg, len, "--resume: '%s' varies '%s' as key %d, not '%s'", path, s->names[k], k + 1,
+                     p->key[k].key);
+            return -1;
+        }
+    for (i = 0; i < n * p->nkey; i++)
+        if (!same(s->vals[i], p->val[i])) {
+            snprintf(msg, len, "--resume: '%s': variant %ld has %s=%s, this sweep %s", path, i / p->nkey,
+                     p->key[i % p->nkey].key, s->vals[i], p->val[i]);
+            return -1;
+        }
+    return 0;
+}
+
+static int resume_child(void *arg)
+{
+    resume_job *j = arg;
+    sw_summary s;
+    char msg[2048];
+    long i;
+    if (sw_summary_load(j->path, &s, msg, sizeof msg) != 0) {
+        cli_error("--resume: %s", msg);
+        return CLI_FAIL;
+    }
+    if (same_sweep(&s, j->path, j->meta, j->p, msg, sizeof msg) != 0) {
+        cli_error("%s", msg);
+        sw_summary_free(&s);
+        return CLI_FAIL;
+    }
+    for (i = 0; i < j->p->nvar; i++) {
+        j->res[i] = s.res[i];
+        j->res[i].index = i;
+        if (j->res[i].status == SW_NOT_RUN) sw_result_blank(&j->res[i], i);
+    }
+    sw_summary_free(&s);
+    return CLI_OK;
+}
+
+int sw_summary_resume(const char *path, const sw_meta *meta, const sw_plan *p, sw_result *res)
+{
+    size_t bytes = sizeof *res * (size_t)(p->nvar > 0 ? p->nvar : 1);
+    sw_result *shared;
+    resume_job j;
+    int rc;
+    char msg[1024];
+    if (cli_regular_input(path, "sweep summary", msg, sizeof msg) != 0) {
+        cli_error("--resume: %s", msg);
+        return -1;
+    }
+    shared = mmap(NULL, bytes, PROT_READ | PROT_WRITE, MAP_SHARED | MAP_ANONYMOUS, -1, 0);
+    if (shared == MAP_FAILED) {
+        cli_error("--resume: reading '%s': out of memory", path);
+        return -1;
+    }
+    j.path = path;
+    j.meta = meta;
+    j.p = p;
+    j.res = shared;
+    rc = cli_isolated(path, resume_child, &j);
+    if (rc == CLI_OK) memcpy(res, shared, bytes);
+    munmap(shared, bytes);
+    return rc == CLI_OK ? 0 : -1;
+}
+

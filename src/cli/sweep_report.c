@@ -1,0 +1,162 @@
+/* capdyn sweep: what it prints (docs/sweep.md): the progress bar on
+ * stderr, the end-of-sweep report, and a summary as columns (--table).
+ * Numbers without a stated precision are printed in the shortest form that
+ * reads back as the same double (cli_fmt_num). */
+#define _POSIX_C_SOURCE 200809L
+#include "sweep.h"
+#include "capdyn/verdict.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* ---- progress ------------------------------------------------------------- */
+
+static void fmt_dur(char *b, size_t n, double s)
+{
+    if (!(s >= 0) || s > 1e8) snprintf(b, n, "?");
+    else if (s < 60) snprintf(b, n, "%.0fs", s);
+    else if (s < 3600) snprintf(b, n, "%dm%02ds", (int)(s / 60), (int)fmod(s, 60));
+    else snprintf(b, n, "%dh%02dm", (int)(s / 3600), (int)fmod(s / 60, 60));
+}
+
+void sw_draw(sw_progress *pg, long done, long failed, int force)
+{
+    char bar[31], eta[32];
+    double now = cli_wall(), rate, f;
+    int i, nf;
+    if (!pg->on || (!force && now - pg->last < 0.2)) return;
+    f = pg->total ? (double)done / (double)pg->total : 1;
+    nf = (int)(f * 30);
+    for (i = 0; i < 30; i++) bar[i] = i < nf ? '#' : '.';
+    bar[30] = 0;
+    rate = now > pg->t0 ? (double)(done - pg->done0) / (now - pg->t0) : 0;
+    fmt_dur(eta, sizeof eta, rate > 0 ? (double)(pg->total - done) / rate : -1);
+    fprintf(stderr, "\r[%s] %ld/%ld variants  %ld failed  %.2f/s  ETA %s ", bar, done, pg->total, failed, rate, eta);
+    fflush(stderr);
+    pg->drawn = 1;
+    pg->last = now;
+}
+
+void sw_clear(sw_progress *pg)
+{
+    if (pg->drawn) fputs("\r\033[K", stderr);
+    pg->drawn = 0;
+}
+
+/* ---- the end of a sweep ---------------------------------------------------- */
+
+void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, long ndone, long nfail, long nrun0,
+                   double wall, int nj)
+{
+    long counts[3] = {0, 0, 0}, i, s, nslice = sw_region(p, res, o->length, NULL, NULL, NULL);
+    for (i = 0; i < p->nvar; i++)
+        if (res[i].status == 0 && res[i].verdict >= 0 && res[i].verdict <= 2) counts[res[i].verdict]++;
+    printf("sweep: %ld of %ld variants run (%ld failed), %ld in %.2f s (%.3g variants/s, -j %d); captured %ld, "
+           "escaped %ld, unresolved %ld; summary '%s'\n",
+           ndone, p->nvar, nfail, ndone - nrun0, wall, wall > 0 ? (double)(ndone - nrun0) / wall : 0.0, nj,
+           counts[CD_VERDICT_CAPTURED], counts[CD_VERDICT_ESCAPED], counts[CD_VERDICT_UNRESOLVED], o->output);
+    if (nslice > 0) {
+        double *area = malloc(sizeof(double) * (size_t)nslice);
+        long *ncap = malloc(sizeof(long) * (size_t)nslice);
+        char *lab = malloc((size_t)nslice * SW_LABEL), num[CLI_NUM];
+        if (area && ncap && lab) {
+            sw_region(p, res, o->length, area, ncap, lab);
+            for (s = 0; s < nslice; s++)
+                printf("region %s: %ld captured, area %s %s\n", lab + s * SW_LABEL, ncap[s], cli_fmt_num(num, area[s]),
+                       o->length > 0 ? "(normalised by length^2)" : "m^2");
+        }
+        free(area);
+        free(ncap);
+        free(lab);
+    }
+    for (i = 0; i < p->nvar && nfail; i++)
+        if (res[i].status != 0 && res[i].status != SW_NOT_RUN) printf("variant %ld failed: %s\n", i, res[i].reason);
+}
+
+/* ---- --table ----------------------------------------------------------------- */
+
+/* a list value as a gnuplot word: quotes dropped, blanks as '_' */
+static void put_word(FILE *out, const char *v)
+{
+    size_t n = strlen(v), i;
+    if (n >= 2 && (v[0] == '"' || v[0] == '\'') && v[n - 1] == v[0]) {
+        v++;
+        n -= 2;
+    }
+    if (n == 0) fputs("\"\"", out);
+    for (i = 0; i < n; i++) fputc(v[i] == ' ' || v[i] == '\t' ? '_' : v[i], out);
+}
+
+static void print_table(const sw_summary *s, const char *path, FILE *out)
+{
+    long i, k, n = (long)s->nvar, nk = s->nkey;
+    size_t c;
+    fprintf(out, "# capdyn sweep summary '%s': %ld variants\n", path, n);
+    fputs("# length ", out);
+    cli_put_num(out, s->length);
+    fputs(" m (keys with \"position\" in their path / length in the *_norm columns; 0: not normalised)\n", out);
+    for (i = 0; i < s->nslice; i++) {
+        fprintf(out, "# region %s area ", s->slice[i]);
+        cli_put_num(out, s->area[i]);
+        fputc('\n', out);
+    }
+    fputs("# index", out);
+    for (k = 0; k < nk; k++) fprintf(out, " %s", s->names[k]);
+    for (k = 0; k < nk; k++) fprintf(out, " %s_norm", s->names[k]);
+    fputs(" verdict status t_capture t_escape peak_fn peak_tau epsilon fn_step_max t_final\n", out);
+    fputs("# verdict: 0 unresolved, 1 captured, 2 escaped, -1 none; status: 0 ok, -1 not run, else failed\n", out);
+    for (i = 0; i < n; i++) {
+        const sw_result *r = &s->res[i];
+        fprintf(out, "%ld", i);
+        for (k = 0; k < nk; k++) {
+            fputc(' ', out);
+            put_word(out, s->vals[i * nk + k]);
+        }
+        for (k = 0; k < nk; k++) {
+            double v = s->num[i * nk + k];
+            fputc(' ', out);
+            if (isnan(v)) put_word(out, s->vals[i * nk + k]);
+            else cli_put_num(out, s->length > 0 && strstr(s->names[k], "position") ? v / s->length : v);
+        }
+        fprintf(out, " %d %d", r->verdict, r->status);
+        {
+            const double col[7] = {r->t_capture, r->t_escape, r->peak_fn, r->peak_tau, r->epsilon, r->fn_step_max,
+                                   r->t_final};
+            for (c = 0; c < 7; c++) {
+                fputc(' ', out);
+                cli_put_num(out, col[c]);
+            }
+        }
+        fputc('\n', out);
+    }
+}
+
+static int table_child(void *arg)
+{
+    const char *path = arg;
+    sw_summary s;
+    char msg[2048];
+    if (sw_summary_load(path, &s, msg, sizeof msg) != 0) {
+        cli_error("%s", msg);
+        return CLI_FAIL;
+    }
+    print_table(&s, path, stdout);
+    sw_summary_free(&s);
+    return CLI_OK;
+}
+
+int sw_summary_table(const char *path)
+{
+    char msg[1024];
+    union {
+        const char *c;
+        void *v;
+    } u;
+    if (cli_regular_input(path, "sweep summary", msg, sizeof msg) != 0) {
+        cli_error("%s", msg);
+        return CLI_FAIL;
+    }
+    u.c = path;
+    return cli_isolated(path, table_child, u.v);
+}
