@@ -153,7 +153,7 @@ Test(null_args, every_public_function_refuses_null_the_documented_way, .timeout 
     CHECK("cd_monitor_init(NULL)", einval(cd_monitor_init(NULL, m, d, NULL, &e), &e, "cd_monitor_init"));
     CHECK("cd_monitor_update(NULL)", (cd_monitor_update(NULL, m, d), 1));
     CHECK("cd_monitor_quality(NULL)", einval(cd_monitor_quality(NULL, m, d, buf, NULL, &e), &e, "cd_monitor_quality"));
-    CHECK("cd_grasp_quality_eval(NULL)", einval(cd_grasp_quality_eval(NULL, 1, v3, NULL, NULL, &e), &e, "cd_grasp_quality_eval"));
+    CHECK("cd_grasp_quality_eval(NULL)", einval(cd_grasp_quality_eval(NULL, 1, v3, NULL, NULL, &e), &e, "grasp quality: result pointer q is NULL"));
     CHECK("cd_scenario_load(NULL)", cd_scenario_load(NULL, NULL, 0, &e) == NULL && e.status != CD_OK);
     CHECK("cd_scenario_free(NULL)", (cd_scenario_free(NULL), 1));
     CHECK("cd_h5_create(NULL)", cd_h5_create(NULL, m, NULL, &e) == NULL && e.status == CD_EINVAL);

@@ -188,10 +188,6 @@ static void first_line(const char *text, char *out, size_t cap)
 cd_status cd_grasp_quality_eval(const cd_grasp_contact *ct, int n, const double c[3], const cd_grasp_options *opt,
                                 cd_grasp_quality *q, cd_error *err)
 {
-    if ((!ct && n > 0) || !c || !q) {
-        cd_error_set(err, CD_EINVAL, "cd_grasp_quality_eval: %s is NULL", !c ? "c" : !q ? "q" : "the contacts");
-        return CD_EINVAL;
-    }
     cd_grasp_options o = opt ? *opt : cd_grasp_options_default();
     double z[3] = {0.0, 0.0, 1.0}, rho, rmax = 0.0, wmax = 0.0, dmin = HUGE_VAL, tol = 0.0;
     double *w;
