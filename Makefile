@@ -44,14 +44,16 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli examples test asan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli examples test test-long doctest asan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI)
 
 help:
 	@echo "make deps     install Debian packages (scripts/install-deps.sh)"
 	@echo "make          build $(LIB) and $(CLI)"
-	@echo "make test     install deps, build, run every test (Criterion), then every example"
+	@echo "make test     install deps, build, run every test but the long ones (Criterion), every example, the doc tests"
+	@echo "make test-long  the long physics regressions and doc examples (minutes; .ci/run runs it)"
+	@echo "make doctest  only the doc tests: every shell block of README.md and docs/ (tests/doctest/run.sh)"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@echo "make MPI=1 [test]  capdyn sweep under mpirun/srun too (build-mpi/; Open MPI: make mpi-deps)"
@@ -125,15 +127,36 @@ lib: $(LIB)
 cli: $(CLI)
 examples: check-deps $(EXAMPLES)
 
+# ---- tests: make test (minutes), make test-long (the long physics) -------
 # The one test command (README, .ci/run): installs what is missing, builds,
-# runs every Criterion test (Criterion prints its synthesis line), then runs
-# every example (a failing example fails the target).
+# runs every Criterion test but the long ones (Criterion prints its synthesis
+# line; tests/run_tests.sh prints progress at least every 20 s), the
+# failing-allocator test, every example (a failing example fails the
+# target), the install check, then the doc tests (tests/doctest/run.sh:
+# every shell block of README.md and docs/*.md, every C snippet of
+# docs/embedding.md).
+# TEST_LONG: the Criterion tests that take minutes (region sweeps, long
+# gripper and capture runs; measured with tests/test_times.sh), run by
+# `make test-long` (.ci/run runs it after make test). Moved, not removed.
+TEST_LONG = @(sweep/tako_vs_space_region_on_a_coarse_grid)
+TEST_ENV = CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR)
 test: deps
 	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)
-	CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '!$(TEST_LONG)' $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
 	@$(MAKE) --no-print-directory install-check
+	@BUILD=$(BUILD) bash tests/doctest/run.sh
+
+test-long: deps
+	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI)
+	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '$(TEST_LONG)' $(TEST_ARGS)
+	@BUILD=$(BUILD) DOCTEST_LONG=1 bash tests/doctest/run.sh
+
+# the doc tests alone (after make)
+doctest: check-deps $(LIB) $(CLI)
+	@BUILD=$(BUILD) bash tests/doctest/run.sh
+# ---- end of the test rules ----
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \
