@@ -221,8 +221,10 @@ for md in "$@"; do
                 nfail=$((nfail + 1)); failures+=("$where: no harness $harness")
                 echo "doctest $where: FAIL (no $harness)"; continue
             fi
+            hasmain=""
+            if grep -q '^int main' "$blk"; then hasmain=-DSNIP_HAS_MAIN; fi
             if ! "$CC" -std=c99 -Wall -Wextra -Wpedantic -Werror -O1 -ffp-contract=off -Iinclude \
-                    -DSNIP_DEFS="\"$blk.defs.h\"" -DSNIP_BODY="\"$blk.body.h\"" \
+                    -DSNIP_DEFS="\"$blk.defs.h\"" -DSNIP_BODY="\"$blk.body.h\"" $hasmain -Wno-unused-variable -Wno-unused-but-set-variable \
                     -o "$blk.exe" "$harness" "$BUILD/libcapdyn.a" $LIBS_CORE -lm > "$blk.log" 2>&1; then
                 nfail=$((nfail + 1)); failures+=("$where: does not compile in $harness")
                 echo "doctest $where: FAIL (compile, $harness)"; head -20 "$blk.log" | sed 's/^/  | /'
