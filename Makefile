@@ -138,7 +138,31 @@ examples: check-deps $(EXAMPLES)
 # TEST_LONG: the Criterion tests that take minutes (region sweeps, long
 # gripper and capture runs; measured with tests/test_times.sh), run by
 # `make test-long` (.ci/run runs it after make test). Moved, not removed.
-TEST_LONG = @(sweep/tako_vs_space_region_on_a_coarse_grid)
+TEST_LONG_LIST = \
+  capture/body_offset_with_misalignment_is_captured \
+  capture/detumbling_stops_the_held_target_at_the_grasp_limit \
+  capture/squeezed_target_at_rest_does_not_drift \
+  capture/checkpoint_with_the_controller_state_reruns_bit_identical \
+  capture/too_fast_target_escapes \
+  capture/handrail_tumbling_is_captured \
+  capture/held_target_at_rest_does_not_drift \
+  capture/momentum_is_conserved_through_the_space_grippers_clutch_events \
+  capture/space_gripper_closes_on_the_trigger \
+  capture/momentum_of_chaser_and_target_is_conserved \
+  capture_scenarios/docking_fixture_is_captured \
+  capture_scenarios/intermediate_axis_target_is_captured \
+  capture_scenarios/solar_panels_target_is_not_reached \
+  capture_scenarios/docking_fixture_conserves_momentum \
+  gripper_scenarios/soft_gripper_wraps_with_every_link_in_contact \
+  gripper_scenarios/space_gripper_cylinder_and_handrail_are_captured_with_one_clutch_per_finger \
+  gripper_scenarios/tako_captures_near_the_palm_and_loses_beyond_the_fingertips \
+  gripper/a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is \
+  gripper/verdicts_captured_escaped_unresolved \
+  sweep/tako_vs_space_region_on_a_coarse_grid \
+  sweep/a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages
+tl_empty :=
+tl_space := $(tl_empty) $(tl_empty)
+TEST_LONG = @($(subst $(tl_space),|,$(strip $(TEST_LONG_LIST))))
 TEST_ENV = CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR)
 test: deps
 	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)

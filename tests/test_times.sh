@@ -13,14 +13,17 @@ set -uo pipefail
 cd "$(dirname "$0")/.."
 BUILD=${BUILD:-build}
 log=$BUILD/test_times.log
-start=$(date +%s)
-CAPDYN_BIN=$PWD/$BUILD/capdyn CAPDYN_ROOT=$PWD "$BUILD/capdyn_tests" -j1 --verbose "$@" > "$log" 2>&1
+cpu=$BUILD/test_times.cpu
+CAPDYN_BIN=$PWD/$BUILD/capdyn CAPDYN_ROOT=$PWD /usr/bin/time -o "$cpu" -f "%e %U %S" \
+    "$BUILD/capdyn_tests" -j1 --verbose "$@" > "$log" 2>&1
 rc=$?
-echo "# $(date -u +%FT%TZ), wall $(( $(date +%s) - start )) s at -j1, exit $rc, load $(cut -d' ' -f1-3 /proc/loadavg)"
+read -r wall u s < <(tail -1 "$cpu")
+echo "# $(date -u +%FT%TZ), at -j1: wall $wall s, CPU $u + $s s (user + system, the tests' processes included), exit $rc, load $(cut -d' ' -f1-3 /proc/loadavg)"
+echo "# on an idle machine a test's wall time is about its wall time here x (CPU / wall) = x $(awk -v c="$u" -v s="$s" -v w="$wall" 'BEGIN { printf "%.2f", (c + s) / w }')"
 awk '
-/^\[(PASS|FAIL)\] [^ ]+::[^ ]+: \([0-9.]+s\)/ {
+/^\[(PASS|FAIL)\] [^ ]+::[^ ]+:.*\([0-9.]+s\)$/ {
     st = substr($1, 2, 4); name = $2; sub(/:$/, "", name)
-    t = $3; gsub(/[()s]/, "", t)
+    t = $NF; gsub(/[()s]/, "", t)
     split(name, p, "::")
     printf "%9.2f  %-4s  %s/%s\n", t, st, p[1], p[2]
     tot[p[1]] += t; all += t
