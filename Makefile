@@ -47,14 +47,16 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli shared examples test python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI) shared
 
 help:
 	@echo "make deps     install Debian packages (scripts/install-deps.sh)"
 	@echo "make          build $(LIB), $(LIB_IO), their shared libraries (.so) and $(CLI)"
-	@echo "make test     install deps, build, run every test (Criterion), then every example"
+	@echo "make test     install deps, build, run every test but the long ones (Criterion), every example, the Python suite, the doc tests"
+	@echo "make test-long  the long physics regressions and doc examples (minutes; .ci/run runs it)"
+	@echo "make doctest  only the doc tests: every shell block of README.md and docs/ (tests/doctest/run.sh)"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
 	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
 	@echo "make tsan     two threads on one model under ThreadSanitizer (tests/tsan/)"
@@ -131,16 +133,61 @@ lib: $(LIB)
 cli: $(CLI)
 examples: check-deps $(EXAMPLES)
 
+# ---- tests: make test (minutes), make test-long (the long physics) -------
 # The one test command (README, .ci/run): installs what is missing, builds,
-# runs every Criterion test (Criterion prints its synthesis line), then runs
-# every example (a failing example fails the target).
+# runs every Criterion test but the long ones (Criterion prints its synthesis
+# line; tests/run_tests.sh prints progress at least every 20 s), the
+# failing-allocator test, every example (a failing example fails the
+# target), the install check, then the doc tests (tests/doctest/run.sh:
+# every shell block of README.md and docs/*.md, every C snippet of
+# docs/embedding.md).
+# TEST_LONG: the Criterion tests that take minutes (region sweeps, long
+# gripper and capture runs; measured with tests/test_times.sh), run by
+# `make test-long` (.ci/run runs it after make test). Moved, not removed.
+TEST_LONG_LIST = \
+  capture/body_offset_with_misalignment_is_captured \
+  capture/detumbling_stops_the_held_target_at_the_grasp_limit \
+  capture/squeezed_target_at_rest_does_not_drift \
+  capture/checkpoint_with_the_controller_state_reruns_bit_identical \
+  capture/too_fast_target_escapes \
+  capture/handrail_tumbling_is_captured \
+  capture/held_target_at_rest_does_not_drift \
+  capture/momentum_is_conserved_through_the_space_grippers_clutch_events \
+  capture/space_gripper_closes_on_the_trigger \
+  capture/momentum_of_chaser_and_target_is_conserved \
+  capture_scenarios/docking_fixture_is_captured \
+  capture_scenarios/intermediate_axis_target_is_captured \
+  capture_scenarios/solar_panels_target_is_not_reached \
+  capture_scenarios/docking_fixture_conserves_momentum \
+  gripper_scenarios/soft_gripper_wraps_with_every_link_in_contact \
+  gripper_scenarios/space_gripper_cylinder_and_handrail_are_captured_with_one_clutch_per_finger \
+  gripper_scenarios/tako_captures_near_the_palm_and_loses_beyond_the_fingertips \
+  gripper/a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is \
+  gripper/verdicts_captured_escaped_unresolved \
+  sweep/tako_vs_space_region_on_a_coarse_grid \
+  sweep/a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages
+tl_empty :=
+tl_space := $(tl_empty) $(tl_empty)
+TEST_LONG = @($(subst $(tl_space),|,$(strip $(TEST_LONG_LIST))))
+TEST_ENV = CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR)
 test: deps
 	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI) $(EXAMPLES) $(FAILALLOC)
-	CAPDYN_BIN=$(abspath $(CLI)) $(if $(filter 1,$(MPI)),CAPDYN_MPI_BIN=$(abspath $(CLI))) CAPDYN_ROOT=$(CURDIR) $(TESTBIN) --jobs $(JOBS) $(TEST_ARGS)
+	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '!($(TEST_LONG))' $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
 	@$(MAKE) --no-print-directory python-test
 	@$(MAKE) --no-print-directory install-check
+	@BUILD=$(BUILD) bash tests/doctest/run.sh
+
+test-long: deps
+	@$(MAKE) --no-print-directory $(TESTBIN) $(CLI)
+	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '$(TEST_LONG)' $(TEST_ARGS)
+	@BUILD=$(BUILD) DOCTEST_LONG=1 bash tests/doctest/run.sh
+
+# the doc tests alone (after make)
+doctest: check-deps $(LIB) $(CLI)
+	@BUILD=$(BUILD) bash tests/doctest/run.sh
+# ---- end of the test rules ----
 
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \

@@ -10,7 +10,8 @@
 #   CAPDYN_RUN_ARGS  extra arguments for every `capdyn run`, e.g.
 #                  "--set simulation.duration=0.2" for a quick look
 #   CAPTURE_MAP    1: also the capture-success map of plots/capture_map.sh
-#                  (25 capture runs, ~10 min of one core; `make capture-map`
+#                  (25 capture runs: 9 min of CPU, 25 min of wall time with -j 1
+#                  on a shared 2-core machine, docs/capture.md; `make capture-map`
 #                  alone); the capture scenarios' figures (plots/capture.sh,
 #                  three runs) are always drawn
 set -euo pipefail
