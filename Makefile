@@ -58,7 +58,7 @@ help:
 	@echo "make test-long  the long physics regressions and doc examples (minutes; .ci/run runs it)"
 	@echo "make doctest  only the doc tests: every shell block of README.md and docs/ (tests/doctest/run.sh)"
 	@echo "make examples build examples/*.c into $(BUILD)/examples/"
-	@echo "make asan     the tests under AddressSanitizer + UndefinedBehaviorSanitizer"
+	@echo "make asan     the tests of make test under AddressSanitizer + UndefinedBehaviorSanitizer (ASAN_LONG=1: the long ones too)"
 	@echo "make tsan     two threads on one model under ThreadSanitizer (tests/tsan/)"
 	@echo "make WERROR=0 ...  any target with warnings not turned into errors"
 	@echo "make MPI=1 [test]  capdyn sweep under mpirun/srun too (build-mpi/; Open MPI: make mpi-deps)"
@@ -189,11 +189,16 @@ doctest: check-deps $(LIB) $(CLI)
 	@BUILD=$(BUILD) bash tests/doctest/run.sh
 # ---- end of the test rules ----
 
+# make asan runs the tests of make test under ASan + UBSan; the long physics
+# regressions (TEST_LONG) run the same code paths over longer simulated
+# times, at several times their cost under the sanitizers: ASAN_LONG=1 adds them
+ASAN_FILTER = $(if $(filter 1,$(ASAN_LONG)),,--filter '!($(TEST_LONG))')
 asan: deps
 	@$(MAKE) --no-print-directory BUILD=build-asan OPT="-O1 -g -fno-omit-frame-pointer -fsanitize=address,undefined -fno-sanitize-recover=undefined" \
 	  EXTRA_LDFLAGS="-fsanitize=address,undefined" build-asan/capdyn_tests build-asan/capdyn $(EXAMPLES:$(BUILD)/%=build-asan/%)
 	CAPDYN_BIN=$(abspath build-asan/capdyn) CAPDYN_ROOT=$(CURDIR) ASAN_OPTIONS=detect_leaks=1 \
-	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 build-asan/capdyn_tests --jobs $(JOBS) $(TEST_ARGS)
+	  LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+	  bash tests/run_tests.sh build-asan/capdyn_tests --jobs $(JOBS) $(ASAN_FILTER) $(TEST_ARGS)
 	@export ASAN_OPTIONS=detect_leaks=1 LSAN_OPTIONS=suppressions=$(CURDIR)/tests/lsan.supp:print_suppressions=0 \
 	  UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1; $(call run_examples,$(EXAMPLES:$(BUILD)/%=build-asan/%))
 
