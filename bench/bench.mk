@@ -16,7 +16,7 @@ $(BENCH_BIN): bench/bench_core.c bench/bench_chain.h $(LIB)
 	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -o $@ $< $(LIB) $(LIBS_CORE)
 
 # capdyn vs MuJoCo through both C APIs (bench/bench_speed.c, docs/performance.md)
-$(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h $(LIB_IO) $(LIB)
+$(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h bench/bench_util.h $(LIB_IO) $(LIB)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -D_DEFAULT_SOURCE -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE) -lmujoco
@@ -24,7 +24,7 @@ $(BENCH_SPEED): bench/bench_speed.c bench/bench_chain.h $(LIB_IO) $(LIB)
 # every shipped scenario with its own settings; the broad phase on vs off
 # (bench/bench_scenarios.c, docs/performance.md "Every scenario")
 BENCH_SCEN = $(BUILD)/bench_scenarios
-$(BENCH_SCEN): bench/bench_scenarios.c $(LIB_IO) $(LIB)
+$(BENCH_SCEN): bench/bench_scenarios.c bench/bench_util.h $(LIB_IO) $(LIB)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
@@ -32,7 +32,7 @@ $(BENCH_SCEN): bench/bench_scenarios.c $(LIB_IO) $(LIB)
 # tick times of a control loop per stepper (bench/bench_ticks.c; it counts
 # heap allocations by interposing malloc, so it is linked without sanitizers)
 BENCH_TICKS = $(BUILD)/bench_ticks
-$(BENCH_TICKS): bench/bench_ticks.c examples/control_loop_model.h $(LIB_IO) $(LIB)
+$(BENCH_TICKS): bench/bench_ticks.c bench/bench_util.h examples/control_loop_model.h $(LIB_IO) $(LIB)
 	@mkdir -p $(dir $@)
 	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)

@@ -48,40 +48,10 @@
 
 #define MAXREP 64
 
-static FILE *out_file;
+#include "bench_util.h"
 
-/* print to stdout and to the results file */
-static void say(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
-static void say(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vprintf(fmt, ap);
-    va_end(ap);
-    if (out_file) {
-        va_start(ap, fmt);
-        vfprintf(out_file, fmt, ap);
-        va_end(ap);
-    }
-    fflush(stdout);
-}
+static double now(void) { return clock_s(CLOCK_MONOTONIC); }
 
-static double now(void)
-{
-    struct timespec ts;
-    clock_gettime(CLOCK_MONOTONIC, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return (x > y) - (x < y);
-}
 static double median_of(const double *v, int n)
 {
     double t[MAXREP];

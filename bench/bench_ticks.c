@@ -55,39 +55,9 @@ void *realloc(void *p, size_t n)
     return __libc_realloc(p, n);
 }
 
-static FILE *out_file;
+#include "bench_util.h"
 
-static void say(const char *fmt, ...)
-#if defined(__GNUC__)
-    __attribute__((format(printf, 1, 2)))
-#endif
-    ;
-static void say(const char *fmt, ...)
-{
-    va_list ap;
-    va_start(ap, fmt);
-    vprintf(fmt, ap);
-    va_end(ap);
-    if (out_file) {
-        va_start(ap, fmt);
-        vfprintf(out_file, fmt, ap);
-        va_end(ap);
-    }
-    fflush(stdout);
-}
 
-static double clock_s(clockid_t id)
-{
-    struct timespec ts;
-    clock_gettime(id, &ts);
-    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-static int cmp_double(const void *a, const void *b)
-{
-    double x = *(const double *)a, y = *(const double *)b;
-    return x < y ? -1 : x > y;
-}
 
 /* quantile q of v[0..n-1] (sorted in place): the smallest value with at least q n values at or below it */
 static double quantile(double *v, long n, double q)
