@@ -61,7 +61,7 @@ typedef struct {
     const double *ft_max;       /* (nslot) max |tangential force| over every step [N] */
 } cli_run_extra;
 
-/* Prints the summary of a results file (the body of `capdyn info`, and the
+/* Prints the summary of a results file, src/cli/report.c (the body of `capdyn info`, and the
  * end-of-run summary of `capdyn run` with extra != NULL). */
 void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extra *extra);
 
