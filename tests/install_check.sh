@@ -78,6 +78,10 @@ for src in "$@"; do
   pkg=capdyn
   if grep -q '#include *<capdyn/io.h>' "$src"; then pkg=capdyn-io; fi
   cp "$src" "$tmp/work/$name.c"
+  # the program's own headers beside it (#include "x.h"), as an embedder keeps them
+  for h in $(sed -n 's/^ *# *include *"\([^"/]*\)".*/\1/p' "$src"); do
+    [ -f "$(dirname "$src")/$h" ] && cp "$(dirname "$src")/$h" "$tmp/work/$h"
+  done
   # static: the archives by path (with the .so installed next to them, -lcapdyn would pick the .so)
   static_libs=$(pkg-config --static --libs "$pkg" | sed -e "s|-lcapdyn_io\b|$lib/libcapdyn_io.a|" -e "s|-lcapdyn\b|$lib/libcapdyn.a|")
   # shellcheck disable=SC2046,SC2086
