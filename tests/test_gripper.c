@@ -699,3 +699,70 @@ Test(gripper, interleaved_fingers_turn_in_separate_planes)
     if (sc) cd_scenario_free(sc);
     else cr_expect(strstr(e.msg, "expected more than the finger radius") != NULL, "%s", e.msg);
 }
+
+/* d->finger_t0 is an input (docs/embedding.md): written between two calls,
+ * the next call restarts the stepper there (one more stats.nrestart than
+ * the same call with nothing written) and the schedule runs on t - t0 from
+ * that boundary. One free link on the ramp theta_s = w (t - t0), held open
+ * (t0 = +inf) until 20 ms, then t0 = 15 ms (the target jumps to w 5 ms at
+ * the boundary; no schedule row lies there to restart the stepper anyway):
+ * at 30 ms the target is w 15 ms (1e-15 rad). A second run takes snapshots
+ * before the write (t0 = +inf, which the state accepts) and after it; each
+ * restores into new data that ends bit-identical to that run. */
+static void finger_t0_run(const cd_model *m, cd_data *d, double t0, double t1, double t2, double *s0, double *s1,
+                          long *r_quiet, long *r_written)
+{
+    cd_error e;
+    long r0;
+    d->finger_t0[0] = HUGE_VAL;
+    cr_assert_eq(cd_sim_advance(m, d, 0.01, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    r0 = d->stats.nrestart;
+    cr_assert_eq(cd_sim_advance(m, d, t1, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    *r_quiet = d->stats.nrestart - r0;
+    if (s0) cd_state_get(m, d, s0);
+    d->finger_t0[0] = t0;
+    if (s1) cd_state_get(m, d, s1);
+    r0 = d->stats.nrestart;
+    cr_assert_eq(cd_sim_advance(m, d, t2, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    *r_written = d->stats.nrestart - r0;
+}
+
+Test(gripper, finger_t0_written_between_calls_takes_effect_at_the_boundary)
+{
+    int b[1], n, k;
+    double I = 1e-5 + 0.05 * 0.025 * 0.025, Kw = 5.0, Dw = 2 * sqrt(Kw * I), w = 0.5, t1 = 0.02, t2 = 0.03, t0 = 0.015;
+    cd_model *m = finger_model(1, 0, CD_FINGER_SPACE, 1.0, Kw, Dw, w, 0.0, b);
+    cd_error e;
+    cd_data *d = cd_data_create(m, 0, &e), *c = cd_data_create(m, 0, &e), *r;
+    size_t ns = cd_state_size(m);
+    double *s0 = malloc(ns * sizeof *s0), *s1 = malloc(ns * sizeof *s1);
+    long rq, rw;
+    cr_assert(d && c && s0 && s1, "%s", e.msg);
+    finger_t0_run(m, d, t0, t1, t2, NULL, NULL, &rq, &rw);
+    cr_expect_eq(rw, rq + 1, "restarts %ld, %ld with nothing written", rw, rq);
+    cr_expect_lt(fabs(d->finger_theta[0] - w * (t2 - t0)), 1e-15, "theta_s %.17g, w (t - t0) %.17g",
+                 d->finger_theta[0], w * (t2 - t0));
+    cr_expect_gt(cd_joint_q(m, d, b[0]), 0.0, "the finger follows from the boundary: q %g", cd_joint_q(m, d, b[0]));
+    cr_expect_null(first_kind(d, CD_EV_CLUTCH, &n), "no clutch without a load");
+    /* held open until t1: the run with snapshots, checked there */
+    finger_t0_run(m, c, t0, t1, t1, s0, s1, &rq, &rw);
+    cr_expect_eq(cd_joint_q(m, c, b[0]), 0.0, "held open, nothing moves: q %g", cd_joint_q(m, c, b[0]));
+    cr_assert_eq(cd_sim_advance(m, c, t2, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    for (k = 0; k < 2; k++) {
+        r = cd_data_create(m, 0, &e);
+        cr_assert(r, "%s", e.msg);
+        cr_assert_eq(cd_state_set(m, r, k ? s1 : s0, &e), CD_OK, "snapshot %d: %s", k, e.msg);
+        if (k == 0) r->finger_t0[0] = t0;
+        cr_assert_eq(cd_sim_advance(m, r, t2, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cr_expect_eq(r->t, c->t);
+        cr_expect_eq(memcmp(r->y, c->y, (size_t)m->ny * sizeof(double)), 0,
+                     "restored from snapshot %d: q %.17g, the run %.17g", k, cd_joint_q(m, r, b[0]),
+                     cd_joint_q(m, c, b[0]));
+        cd_data_free(r);
+    }
+    free(s0);
+    free(s1);
+    cd_data_free(c);
+    cd_data_free(d);
+    cd_model_free(m);
+}

@@ -71,6 +71,9 @@
  * status is written last, after the data commit succeeded, and in place
  * (fixed-size attributes), so a file never says "ok" when its last commit
  * failed.
+ * An allocation that fails (capdyn's, or HDF5's as its error stack or
+ * errno says: note_h5_error) is reported as out of memory, CD_ENOMEM,
+ * never as a disk problem.
  *
  * HDF5 prints its error stack by default; every public call here silences
  * the automatic printing for its own duration (saved and restored), so the
@@ -168,6 +171,10 @@ struct cd_h5_writer {
      * the file is consistent (as of its last commit) and still takes the
      * closing attributes. */
     int failed, stopped;
+    /* oom: an allocation failed during this public call (capdyn's own, or
+     * HDF5's error stack says so): a failed write is reported as out of
+     * memory, not as a disk problem (writer_quiet_begin) */
+    int oom;
     char why[512];                /* the first error, repeated by later calls */
     int space_check;              /* check free space before each commit (default 1) */
     double reserve;               /* bytes the check keeps free beyond its estimate */
@@ -179,6 +186,45 @@ struct cd_h5_writer {
     char *claim_tmp, *claim_target;
     int claim_keep;               /* keep claim_tmp at the end (its rename failed) */
 };
+
+/* ---- out of memory, told apart from a failed write ---------------------------
+ * Every public call of the writer replaces HDF5's automatic error printing
+ * with note_h5_error (writer_quiet_begin), which HDF5 calls with the error
+ * stack of every API call that fails: when the innermost record of that
+ * stack (the error's origin) is an allocation failure (minor H5E_CANTALLOC,
+ * which HDF5 1.10 files under the failing layer's major, e.g. H5E_PLIST; or
+ * H5E_RESOURCE / H5E_NOSPACE), or errno is ENOMEM (a failed malloc; a
+ * failed write leaves ENOSPC, EDQUOT, EFBIG or EIO), w->oom is set. capdyn's own
+ * allocations on the writer's paths set it through note_oom. A failed
+ * write then says "out of memory" (write_failed). */
+static herr_t innermost_alloc(unsigned n, const H5E_error2_t *e, void *client)
+{
+    if (n == 0 && (e->min_num == H5E_CANTALLOC || (e->maj_num == H5E_RESOURCE && e->min_num == H5E_NOSPACE)))
+        *(int *)client = 1;
+    return 0;
+}
+static herr_t note_h5_error(hid_t estack, void *client)
+{
+    int oom = errno == ENOMEM;
+    (void)H5Ewalk2(estack, H5E_WALK_UPWARD, innermost_alloc, &oom);
+    if (oom) ((struct cd_h5_writer *)client)->oom = 1;
+    return 0;
+}
+/* capdyn's own allocation failed, inside a writer call: the writer of that
+ * call (the client of the error handler writer_quiet_begin set) is told */
+static void note_oom(void)
+{
+    H5E_auto2_t f = NULL;
+    void *c = NULL;
+    if (H5Eget_auto2(H5E_DEFAULT, &f, &c) >= 0 && f == note_h5_error && c) ((struct cd_h5_writer *)c)->oom = 1;
+}
+static void writer_quiet_begin(cd_h5_quiet *q, struct cd_h5_writer *w)
+{
+    (void)H5Eget_auto2(H5E_DEFAULT, &q->func, &q->data);
+    (void)H5Eset_auto2(H5E_DEFAULT, note_h5_error, w);
+    w->oom = 0;
+    errno = 0;
+}
 
 /* ---- error plumbing --------------------------------------------------------- */
 
@@ -247,7 +293,7 @@ static int attr_str_fixed(hid_t obj, const char *name, const char *s, size_t len
     char *buf = calloc(1, len);
     hid_t t;
     int r;
-    if (!buf) return -1;
+    if (!buf) { note_oom(); return -1; }
     snprintf(buf, len, "%s", s ? s : "");
     t = str_type(len);
     if (t < 0) { free(buf); return -1; }
@@ -271,7 +317,7 @@ static int attr_strv(hid_t obj, const char *name, int n, const char *const *v, s
     char *flat = calloc((size_t)n, len);
     hid_t t;
     int i, r;
-    if (!flat) return -1;
+    if (!flat) { note_oom(); return -1; }
     for (i = 0; i < n; i++) snprintf(flat + (size_t)i * len, len, "%s", v[i]);
     t = str_type(len);
     r = attr_write(obj, name, t, t, n, flat);
@@ -383,7 +429,7 @@ static int write_model_tables(hid_t file, const cd_model *m)
     br = calloc((size_t)(m->nbody ? m->nbody : 1), sizeof *br);
     cr = calloc((size_t)(m->ncp ? m->ncp : 1), sizeof *cr);
     sr = calloc((size_t)(m->nshape ? m->nshape : 1), sizeof *sr);
-    if (!br || !cr || !sr) { rc = -1; goto out; }
+    if (!br || !cr || !sr) { note_oom(); rc = -1; goto out; }
     for (i = 0; i < m->nbody; i++) {
         body_row *r = br + i;
         r->id = i;
@@ -478,7 +524,7 @@ static int write_slot_table(hid_t g, const cd_model *m)
     slot_row *r = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof *r);
     hid_t ct;
     int k, rc;
-    if (!r) return -1;
+    if (!r) { note_oom(); return -1; }
     for (k = 0; k < m->nslot; k++) {
         int cp = m->slot_cp[k], sh = m->slot_shape[k];
         const cd_contact_law *L = &m->law[m->slot_law[k]];
@@ -539,7 +585,7 @@ static int add_series(cd_h5_writer *w, hid_t loc, const char *name, int type, in
     if (w->nser == w->capser) {
         int nc = w->capser ? 2 * w->capser : 32;
         h5_series *ns = realloc(w->ser, (size_t)nc * sizeof *ns);
-        if (!ns) return -1;
+        if (!ns) { w->oom = 1; return -1; }
         w->ser = ns;
         w->capser = nc;
     }
@@ -756,6 +802,14 @@ static cd_status refused(cd_h5_writer *w, cd_error *err)
 static cd_status write_failed(cd_h5_writer *w, cd_error *err, const char *what)
 {
     w->failed = 1;
+    if (w->oom) {
+        snprintf(w->why, sizeof w->why,
+                 "results file '%s': out of memory while %s; the file is as of its last commit (%lld samples) "
+                 "and may need 'h5clear --increment=0 %s' before it can be read",
+                 w->path, what, w->ncommitted, w->path);
+        seterr(err, CD_ENOMEM, "%s", w->why);
+        return CD_ENOMEM;
+    }
     snprintf(w->why, sizeof w->why,
              "results file '%s': %s failed (disk full, quota or I/O error); the file is as of its last "
              "commit (%lld samples) and may need 'h5clear --increment=0 %s' before it can be read",
@@ -1108,7 +1162,10 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
         attr_int(gs, "body_first", b0);
         attr_int(gs, "nbody", (int)nb);
         jn = malloc((size_t)(m->sys_nbody[s]) * sizeof *jn);
-        if (jn) {
+        if (!jn) {
+            w->oom = 1;
+            ok = 0;
+        } else {
             for (i = 0; i < (int)nb; i++) jn[i] = m->body_name[b0 + i];
             attr_strv(gs, "body_names", (int)nb, jn, CD_H5_NAMELEN);
             if (nj > 0) attr_strv(gs, "joint_names", nj, jn + 1, CD_H5_NAMELEN);
@@ -1154,6 +1211,7 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
     if (m->nu > 0) {
         hid_t ga = H5Gcreate2(w->file, "actuators", H5P_DEFAULT, H5P_DEFAULT, H5P_DEFAULT);
         const char **an = malloc((size_t)m->nu * sizeof *an);
+        if (!an) w->oom = 1;
         if (ga < 0 || !an) { free(an); if (ga >= 0) H5Gclose(ga); return -1; }
         attr_int(ga, "nactuator", m->nu);
         for (k = 0; k < m->nu; k++) an[k] = m->act_name[k] ? m->act_name[k] : "";
@@ -1182,7 +1240,7 @@ static int alloc_buffers(cd_h5_writer *w)
     if (w->cap_rows < 1) w->cap_rows = 1;
     for (i = 0; i < w->nser; i++) {
         w->ser[i].buf = malloc((size_t)w->cap_rows * w->ser[i].rowlen * type_size(w->ser[i].type));
-        if (!w->ser[i].buf) return -1;
+        if (!w->ser[i].buf) { w->oom = 1; return -1; }
     }
     return 0;
 }
@@ -1471,31 +1529,50 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         seterr(err, CD_ENOMEM, "out of memory");
         return NULL;
     }
-    cd_h5_quiet_begin(&q);
+    writer_quiet_begin(&q, w);
     /* rule 2 (top of the file): never reuse freed space */
     fcpl = H5Pcreate(H5P_FILE_CREATE);
     fapl = H5Pcreate(H5P_FILE_ACCESS);
-    if (fcpl >= 0) (void)H5Pset_file_space_strategy(fcpl, H5F_FSPACE_STRATEGY_NONE, 0, (hsize_t)1);
-    if (fapl >= 0) (void)H5Pset_file_locking(fapl, 0, 1);
+    /* a property that could not be set (out of memory) fails the create:
+     * HDF5 1.10 leaves such a list damaged */
+    if (fcpl >= 0 && H5Pset_file_space_strategy(fcpl, H5F_FSPACE_STRATEGY_NONE, 0, (hsize_t)1) < 0) {
+        H5Pclose(fcpl);
+        fcpl = -1;
+    }
+    if (fapl >= 0 && H5Pset_file_locking(fapl, 0, 1) < 0) {
+        H5Pclose(fapl);
+        fapl = -1;
+    }
     w->file = fcpl >= 0 && fapl >= 0 ? H5Fcreate(c.tmp, H5F_ACC_TRUNC, fcpl, fapl) : -1;
     if (fcpl >= 0) H5Pclose(fcpl);
     if (fapl >= 0) H5Pclose(fapl);
     if (w->file < 0) {
+        int oom = w->oom;
         cd_h5_quiet_end(&q);
         writer_free(w);
         claim_release(&c);
-        seterr(err, CD_EIO, "cannot create results file '%s': HDF5 refused to create it", path);
+        if (oom)
+            seterr(err, CD_ENOMEM, "cannot create results file '%s': out of memory", path);
+        else
+            seterr(err, CD_EIO, "cannot create results file '%s': HDF5 refused to create it", path);
         return NULL;
     }
+    /* an allocation that failed anywhere in the layout (some attribute
+     * writes are not checked one by one) fails it too: no file lacks a part
+     * of its layout */
     if (create_event_types(w) < 0 || write_root_attrs(w, m, sc) < 0 || write_model_tables(w->file, m) < 0 ||
-        create_layout(w, m) < 0 || alloc_buffers(w) < 0 ||
+        create_layout(w, m) < 0 || alloc_buffers(w) < 0 || w->oom ||
         H5Fflush(w->file, H5F_SCOPE_GLOBAL) < 0) {
+        int oom = w->oom;
         w->failed = 1; /* closed without writing more, then removed */
         writer_free(w);
         cd_h5_quiet_end(&q);
         claim_release(&c);
-        seterr(err, CD_EIO, "cannot write the layout of results file '%s' (disk full, file size limit or HDF5 error)",
-               path);
+        if (oom)
+            seterr(err, CD_ENOMEM, "cannot write the layout of results file '%s': out of memory", path);
+        else
+            seterr(err, CD_EIO,
+                   "cannot write the layout of results file '%s' (disk full, file size limit or HDF5 error)", path);
         return NULL;
     }
     cd_h5_quiet_end(&q);
@@ -1527,7 +1604,7 @@ static int take_events(cd_h5_writer *w, const cd_data *d)
         if (w->ev_nbuf == w->ev_capbuf) {
             long nc = w->ev_capbuf ? 2 * w->ev_capbuf : 256;
             cd_event *nb = realloc(w->evbuf, (size_t)nc * sizeof *nb);
-            if (!nb) return -1;
+            if (!nb) { w->oom = 1; return -1; }
             w->evbuf = nb;
             w->ev_capbuf = nc;
         }
@@ -1658,7 +1735,8 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     clock_gettime(CLOCK_MONOTONIC, &now);
     row_f64(w, w->s[CD_SER_WALL_TIME])[0] = (double)(now.tv_sec - w->wall0.tv_sec) + 1e-9 * (double)(now.tv_nsec - w->wall0.tv_nsec);
     if (take_events(w, d) < 0) {
-        seterr(err, CD_ENOMEM, "out of memory buffering events");
+        seterr(err, CD_ENOMEM, "results file '%s': out of memory buffering the events of the sample at t = %.9g s",
+               w->path, d->t);
         return CD_ENOMEM;
     }
     w->nbuf++;
@@ -1669,7 +1747,7 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
         cd_h5_quiet q;
         cd_status st;
         cd_error cerr;
-        cd_h5_quiet_begin(&q);
+        writer_quiet_begin(&q, w);
         st = commit(w, fin == CD_OK ? err : &cerr);
         cd_h5_quiet_end(&q);
         if (st != CD_OK) return st;
@@ -1685,7 +1763,7 @@ cd_status cd_h5_flush(cd_h5_writer *w, cd_error *err)
         seterr(err, CD_EINVAL, "cd_h5_flush: NULL writer");
         return CD_EINVAL;
     }
-    cd_h5_quiet_begin(&q);
+    writer_quiet_begin(&q, w);
     st = commit(w, err);
     cd_h5_quiet_end(&q);
     return st;
@@ -1707,15 +1785,17 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
     int rc = 0;
     if (!w) return CD_OK;
     if (!err) err = &tmp;
-    cd_h5_quiet_begin(&q);
+    writer_quiet_begin(&q, w);
     f = w->file;
     if (!w->failed && !w->stopped) {
+        cd_status cst;
         /* the last events (logged after the last sample) still belong in the table */
         if (d && m && take_events(w, d) < 0) {
-            seterr(err, CD_ENOMEM, "out of memory buffering events");
+            seterr(err, CD_ENOMEM, "results file '%s': out of memory buffering the last events", w->path);
             st = CD_ENOMEM;
         }
-        if (commit(w, st == CD_OK ? err : &tmp) != CD_OK && st == CD_OK) st = CD_EIO;
+        cst = commit(w, st == CD_OK ? err : &tmp);
+        if (cst != CD_OK && st == CD_OK) st = cst;
     } else {
         st = refused(w, err);
     }

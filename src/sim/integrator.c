@@ -94,7 +94,7 @@ typedef struct {
     int last_valid;           /* ylast/tlast describe d's outputs (no direct cd_forward since) */
     double *in_snap;          /* inputs at the end of the last call */
     double *y_end;            /* y at the end of the last call */
-    int nin;                  /* inputs: nu + nv + 12 nbody + nuser (user modes) */
+    int nin;                  /* inputs: nu + nv + 12 nbody + nuser (user modes) + nfinger (schedule origins) */
     cd_control_fn ctl_fn;     /* the callbacks at the end of the last call */
     void *ctl_user, *sw_user;
     cd_user_switch_fn sw_fn;
@@ -179,7 +179,7 @@ void cd_integ_free(void *p)
 
 size_t cd_integ_size(const cd_model *m)
 {
-    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
     /* the struct, then 16 n + nin doubles, then the ros34pw2 buffers */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
            (m->opt.stepper == CD_STEP_ROS34PW2 || m->opt.stepper == CD_STEP_AUTO ? cd_rosw_size(m) : 0);
@@ -188,7 +188,7 @@ size_t cd_integ_size(const cd_model *m)
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
 {
     const gsl_odeiv2_step_type *T = NULL;
-    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser);
+    size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
     cd_integ *I = (cd_integ *)mem;
     double *p;
     memset(I, 0, cd_integ_size(m));
@@ -722,6 +722,12 @@ static int inputs_sync(const cd_model *m, cd_data *d, cd_integ *I, int copy)
         if (p[i] != (double)d->user_mode[i]) diff = 1;
         if (copy) p[i] = d->user_mode[i];
     }
+    p += m->nuser;
+    /* the clutched fingers' schedule origins (+inf holds a finger open) */
+    if (m->nfinger > 0) {
+        if (memcmp(p, d->finger_t0, (size_t)m->nfinger * sizeof(double)) != 0) diff = 1;
+        if (copy) memcpy(p, d->finger_t0, (size_t)m->nfinger * sizeof(double));
+    }
     if (I->ctl_fn != d->control || I->ctl_user != d->control_user || I->sw_fn != d->user_switch ||
         I->tr_fn != d->user_transition || I->sw_user != d->switch_user)
         diff = 1;
@@ -1061,7 +1067,10 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 /* ---- the integrator's part of the complete state ------------------------------ */
 #define INTEG_FIXED_WORDS 15
 
-int cd_integ_state_size(const cd_model *m) { return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody + m->nuser; }
+int cd_integ_state_size(const cd_model *m)
+{
+    return INTEG_FIXED_WORDS + m->ny + m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger;
+}
 
 void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
 {
@@ -1103,10 +1112,10 @@ int cd_integ_state_check(const cd_model *m, const double *b, char *why, size_t l
         }
     }
     for (i = INTEG_FIXED_WORDS; i < n; i++)
-        if (!isfinite(b[i])) {
-            snprintf(why, len, "the integrator's %s value %d is %.17g (expected a finite number)",
+        if (!isfinite(b[i]) && !(i >= n - m->nfinger && b[i] == HUGE_VAL)) { /* a schedule origin may be +inf */
+            snprintf(why, len, "the integrator's %s value %d is %.17g (expected a finite number%s)",
                      i < INTEG_FIXED_WORDS + m->ny ? "saved end state" : "saved input", i - INTEG_FIXED_WORDS -
-                     (i < INTEG_FIXED_WORDS + m->ny ? 0 : m->ny), b[i]);
+                     (i < INTEG_FIXED_WORDS + m->ny ? 0 : m->ny), b[i], i >= n - m->nfinger ? " or +inf" : "");
             return -1;
         }
     return 0;

@@ -18,7 +18,7 @@
  * lo, hi, what); kind i is an int array (stored exactly as doubles, each a
  * whole number in [lo, hi]; hi = -1: act_piece, at most the actuator's
  * schedule rows), d a double array (finite; sw_tswitch may also be -inf,
- * its value before any switch). One list serves the size, the check, the
+ * its value before any switch, finger_t0 +inf, a finger held open). One list serves the size, the check, the
  * save, the restore and the evaluation copy. */
 #define STATE_ARRAYS(X)                                                                           \
     X(d, y, m->ny, 0, 0, "a state value")                                                         \
@@ -91,7 +91,9 @@ static int check_d(const cd_model *m, const double **p, const char *field, int n
     (void)m; (void)lo; (void)hi;
     for (k = 0; k < n; k++) {
         double v = (*p)[k];
-        if (isfinite(v) || (v == -HUGE_VAL && !strcmp(field, "sw_tswitch"))) continue;
+        if (isfinite(v) || (v == -HUGE_VAL && !strcmp(field, "sw_tswitch")) ||
+            (v == HUGE_VAL && !strcmp(field, "finger_t0")))
+            continue;
         snprintf(why, len, "%s[%d] is %s (%s must be finite)", field, k, nonfinite(v), what);
         return -1;
     }

@@ -28,7 +28,11 @@
  * gsl_odeiv2_control_standard_new (called by gsl_odeiv2_driver_alloc_*,
  * in cd_data_create) dereferences the NULL of its own failed allocation:
  * allocations under it are granted and counted apart ("inside GSL's control
- * set-up"). docs/reliability.md states both. */
+ * set-up"). docs/reliability.md states both.
+ *
+ * A second part (test_writer, below) does the same for the HDF5 results
+ * writer: a failed allocation must be reported as out of memory, not as a
+ * disk problem. */
 #define _GNU_SOURCE
 #include "capdyn/io.h"
 #include "capdyn/sim.h"
@@ -41,6 +45,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 /* ---- the interposed allocator ---- */
 extern void *__libc_malloc(size_t);
@@ -55,10 +60,45 @@ static long g_live;     /* allocations not yet freed */
 static int g_armed;     /* counting on */
 static long g_in_toml;  /* the failing allocation was inside toml++: granted */
 static long g_in_gsl;   /* ... inside GSL's gsl_odeiv2_control_*_new: granted */
+static long g_in_h5;    /* ... inside libhdf5 (the writer's phase): granted */
+static int g_h5_mode;   /* writer phase: 0 off; count (and fail) only the allocations 1 outside libhdf5,
+                           2 inside it */
 
 /* address ranges of libtomlplusplus.so's loaded segments */
 static struct { unsigned long lo, hi; } g_toml[8];
 static int g_ntoml;
+/* ... and of libhdf5.so's */
+static struct { unsigned long lo, hi; } g_hdf5[8];
+static int g_nhdf5;
+
+static int find_hdf5(struct dl_phdr_info *info, size_t size, void *data)
+{
+    int i;
+    (void)size;
+    (void)data;
+    if (!info->dlpi_name || !strstr(info->dlpi_name, "libhdf5") || strstr(info->dlpi_name, "_hl")) return 0;
+    for (i = 0; i < info->dlpi_phnum && g_nhdf5 < 8; i++)
+        if (info->dlpi_phdr[i].p_type == PT_LOAD) {
+            g_hdf5[g_nhdf5].lo = info->dlpi_addr + info->dlpi_phdr[i].p_vaddr;
+            g_hdf5[g_nhdf5].hi = g_hdf5[g_nhdf5].lo + info->dlpi_phdr[i].p_memsz;
+            g_nhdf5++;
+        }
+    return 1;
+}
+
+/* 1: the allocation is made inside libhdf5 */
+static int inside_hdf5(void)
+{
+    void *fr[64];
+    int n, i, k, r = 0;
+    g_armed = 0;
+    n = backtrace(fr, 64);
+    for (i = 0; i < n && !r; i++)
+        for (k = 0; k < g_nhdf5; k++)
+            if ((unsigned long)fr[i] >= g_hdf5[k].lo && (unsigned long)fr[i] < g_hdf5[k].hi) r = 1;
+    g_armed = 1;
+    return r;
+}
 
 static int find_toml(struct dl_phdr_info *info, size_t size, void *data)
 {
@@ -98,6 +138,13 @@ static int known_defect(void)
 static int should_fail(void)
 {
     if (!g_armed) return 0;
+    if (g_h5_mode) { /* count only the allocations outside (1) or inside (2) libhdf5 */
+        if (inside_hdf5() != (g_h5_mode == 2)) {
+            g_in_h5 += g_h5_mode == 1;
+            return 0;
+        }
+        return ++g_count == g_fail_at;
+    }
     g_count++;
     if (g_count != g_fail_at) return 0;
     switch (known_defect()) {
@@ -191,6 +238,169 @@ static cd_status work(char *msg, size_t len)
     return st;
 }
 
+/* ---- the results writer (issue 24) ----
+ * The work: cd_h5_create of a results file, three cd_h5_append (0.02 s of
+ * simulation between them, not counted), cd_h5_flush and cd_h5_close.
+ * 1. Every allocation of it that capdyn makes fails in turn; each run must
+ *    end in success or with CD_ENOMEM and a one-line message that says
+ *    "out of memory" and not "disk full" (a failed allocation is not a disk
+ *    problem). Allocations inside libhdf5 are granted and counted apart:
+ *    HDF5 1.10 does not survive all of its own failed allocations (measured
+ *    with this program: a failed allocation inside H5Pset_file_locking
+ *    leaves the list damaged and its H5Pclose frees twice; after others,
+ *    every later H5Fcreate of the process fails).
+ * 2. The first allocation inside libhdf5 (H5Pcreate's, in cd_h5_create)
+ *    fails: HDF5's error stack says it could not allocate, and the message
+ *    must say "out of memory" (CD_ENOMEM), not name a disk problem.
+ * HDF5 keeps free lists, so allocations still live after a run are not
+ * counted here. */
+static char g_h5dir[4096];
+
+static void rm_results(void)
+{
+    char p[4200];
+    snprintf(p, sizeof p, "%s/r.h5", g_h5dir);
+    (void)unlink(p);
+}
+
+/* returns the first non-OK status (msg filled) */
+static cd_status work_h5(cd_scenario *sc, char *msg, size_t len)
+{
+    cd_error err;
+    cd_data *d;
+    cd_h5_writer *w;
+    cd_status st = CD_OK, cst;
+    char path[4200];
+    int k, armed = g_armed; /* allocations outside the writer's calls are not failed */
+    msg[0] = 0;
+    g_armed = 0;
+    d = cd_data_create(sc->model, 16, &err);
+    g_armed = armed;
+    if (!d) {
+        snprintf(msg, len, "cd_data_create: %s", err.msg);
+        return err.status;
+    }
+    snprintf(path, sizeof path, "%s/r.h5", g_h5dir);
+    w = cd_h5_create(path, sc->model, sc, &err);
+    if (!w) {
+        snprintf(msg, len, "%s", err.msg);
+        g_armed = 0;
+        cd_data_free(d);
+        g_armed = armed;
+        return err.status;
+    }
+    for (k = 0; k < 3 && st == CD_OK; k++) {
+        g_armed = 0;
+        if (k > 0 && cd_sim_advance(sc->model, d, d->t + 0.02, NULL, NULL, &err) != CD_OK) {
+            snprintf(msg, len, "the run failed: %s", err.msg);
+            st = CD_EINVAL; /* counted as bad */
+        }
+        g_armed = armed;
+        if (st == CD_OK && (st = cd_h5_append(w, sc->model, d, &err)) != CD_OK) snprintf(msg, len, "%s", err.msg);
+    }
+    if (st == CD_OK && (st = cd_h5_flush(w, &err)) != CD_OK) snprintf(msg, len, "%s", err.msg);
+    cst = cd_h5_close(w, sc->model, d, CD_OK, NULL, &err);
+    if (st == CD_OK && cst != CD_OK) {
+        st = cst;
+        snprintf(msg, len, "%s", err.msg);
+    }
+    g_armed = 0;
+    cd_data_free(d);
+    g_armed = armed;
+    return st;
+}
+
+static int test_writer(void)
+{
+    static const char *const ov[] = {"simulation.duration=0.06"};
+    cd_error err;
+    cd_scenario *sc;
+    char msg[1024];
+    long total, n, ok = 0, enomem = 0, bad = 0, in_h5;
+    cd_status st;
+    const char *tmp = getenv("TMPDIR");
+    snprintf(g_h5dir, sizeof g_h5dir, "%s/capdyn_failalloc_XXXXXX", tmp && *tmp ? tmp : "/tmp");
+    if (!mkdtemp(g_h5dir)) {
+        printf("failalloc: cannot make a temporary directory\n");
+        return 1;
+    }
+    sc = cd_scenario_load(g_scene, ov, 1, &err);
+    if (!sc) {
+        printf("failalloc: the scenario does not load: %s\n", err.msg);
+        return 1;
+    }
+    st = work_h5(sc, msg, sizeof msg); /* warm-up, twice: HDF5's free lists fill in the first two runs */
+    rm_results();
+    if (st == CD_OK) st = work_h5(sc, msg, sizeof msg);
+    rm_results();
+    dl_iterate_phdr(find_hdf5, NULL);
+    if (st != CD_OK || g_nhdf5 == 0) {
+        printf("failalloc: the results file is not written (%s) or libhdf5 is not loaded\n", msg);
+        cd_scenario_free(sc);
+        return 1;
+    }
+    g_count = 0;
+    g_fail_at = 0;
+    g_in_h5 = 0;
+    g_h5_mode = 1; /* the count of capdyn's allocations (those inside libhdf5 are granted) */
+    g_armed = 1;
+    st = work_h5(sc, msg, sizeof msg);
+    g_armed = 0;
+    total = g_count;
+    in_h5 = g_in_h5;
+    rm_results();
+    if (st != CD_OK) {
+        printf("failalloc: the counting run of the writer failed: %s\n", msg);
+        cd_scenario_free(sc);
+        return 1;
+    }
+    for (n = 1; n <= total; n++) {
+        if (getenv("FAILALLOC_TRACE")) fprintf(stderr, "failalloc: writer: failing allocation %ld\n", n);
+        g_count = 0;
+        g_fail_at = n;
+        g_armed = 1;
+        st = work_h5(sc, msg, sizeof msg);
+        g_armed = 0;
+        rm_results();
+        if (st == CD_OK) {
+            ok++;
+        } else if (msg[0] == 0 || strchr(msg, '\n')) {
+            printf("failalloc: writer: allocation %ld failing: status %s without a one-line message\n", n,
+                   cd_status_string(st));
+            bad++;
+        } else if (st == CD_ENOMEM && strstr(msg, "out of memory") && !strstr(msg, "disk full")) {
+            enomem++;
+        } else {
+            printf("failalloc: writer: allocation %ld of %ld failing: status %s, expected %s saying \"out of memory\": "
+                   "%s\n", n, total, cd_status_string(st), cd_status_string(CD_ENOMEM), msg);
+            bad++;
+        }
+    }
+    printf("failalloc: %ld allocations by capdyn (and %ld inside HDF5, granted) in results create + 3 appends + "
+           "flush + close; failing each: %ld CD_ENOMEM saying out of memory, %ld still succeed, %ld bad\n",
+           total, in_h5, enomem, ok, bad);
+    /* 2: HDF5's own failed allocation */
+    g_h5_mode = 2;
+    g_count = 0;
+    g_fail_at = 1;
+    g_armed = 1;
+    st = work_h5(sc, msg, sizeof msg);
+    g_armed = 0;
+    g_h5_mode = 0;
+    rm_results();
+    if (st != CD_ENOMEM || !strstr(msg, "cannot create results file") || !strstr(msg, "out of memory")) {
+        printf("failalloc: writer: the first allocation inside HDF5 failing: status %s, expected %s saying "
+               "\"cannot create results file ...: out of memory\": %s\n", cd_status_string(st),
+               cd_status_string(CD_ENOMEM), msg);
+        bad++;
+    } else {
+        printf("failalloc: the first allocation inside HDF5 failing: %s\n", msg);
+    }
+    cd_scenario_free(sc);
+    (void)rmdir(g_h5dir);
+    return bad ? 1 : 0;
+}
+
 int main(void)
 {
     const char *root = getenv("CAPDYN_ROOT");
@@ -258,5 +468,5 @@ int main(void)
            "opening a file), %ld still succeed (of which %ld inside toml++ and %ld inside GSL's control set-up, "
            "granted), %ld bad\n",
            total, enomem, eio, ok, g_in_toml, g_in_gsl, bad);
-    return bad ? 1 : 0;
+    return test_writer() || bad ? 1 : 0;
 }
