@@ -1236,3 +1236,60 @@ Test(cli, numbers_print_in_the_shortest_form_that_reads_back, .timeout = 60)
     free(err);
     rm_rf(dir);
 }
+
+/* issue 22 (a): a capture scenario without [capture] workspace gets a default
+ * that covers the arm's reach: 1.5 x (the hand's reach + the arm's stretched
+ * length from the first arm joint to the palm centre: 0.15 + 0.9 + 0.9 + 0.1
+ * + 0.1 m of joint offsets + 0.12 m palm offset = 2.27 m), not 'escaped at
+ * t = 0' (the target's CoM starts 1.12 m from the palm) */
+Test(cli, a_capture_without_workspace_covers_the_arm_reach)
+{
+    char p[1024];
+    const char *r = getenv("CAPDYN_ROOT");
+    cd_error e;
+    cd_scenario *sc;
+    cd_data *d;
+    cd_monitor mo;
+    cd_monitor_opts op;
+    snprintf(p, sizeof p, "%s/scenarios/capture_handrail_tumbling.toml", r ? r : ".");
+    sc = cd_scenario_load(p, NULL, 0, &e);
+    cr_assert(sc, "%s", e.msg);
+    d = cd_data_create(sc->model, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    op = cd_scenario_monitor_opts(sc);
+    op.workspace = 0; /* what the loader leaves when the key is omitted */
+    cr_assert_eq(cd_monitor_init(&mo, sc->model, d, &op, &e), CD_OK, "%s", e.msg);
+    cr_expect(fabs(mo.opt.workspace - 1.5 * (mo.reach + 2.27)) < 1e-12, "workspace %.17g, reach %.17g", mo.opt.workspace,
+              mo.reach);
+    cd_monitor_update(&mo, sc->model, d);
+    cr_expect(mo.offset_norm > 1.0 && mo.offset_norm < mo.opt.workspace, "offset %g, workspace %g", mo.offset_norm,
+              mo.opt.workspace);
+    cr_expect_eq(mo.verdict, CD_VERDICT_UNRESOLVED, "verdict %s at t = 0", cd_verdict_name(mo.verdict));
+    cd_data_free(d);
+    cd_scenario_free(sc);
+}
+
+/* issue 22 (a): an explicit workspace smaller than the target's start
+ * distance is warned about by check (and run) */
+Test(cli, a_target_outside_the_workspace_is_warned_about)
+{
+    char dir[256], sc[512], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "capture_handrail_tumbling.toml");
+    rc = capdyn(dir, &out, &err, "check", sc, "--set", "capture.workspace=0.5", (char *)NULL);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(err && strstr(err, "capdyn: warning: ") &&
+                  strstr(err, ": the object 'target' starts 1.123 m from the palm centre, outside the capture workspace "
+                              "([capture] workspace = 0.5 m): the verdict is 'escaped' at t = 0\n"),
+              "stderr: %s", err ? err : "(none)");
+    free(out);
+    free(err);
+    out = err = NULL;
+    rc = capdyn(dir, &out, &err, "check", sc, (char *)NULL);
+    cr_expect_eq(rc, 0);
+    cr_expect(!err || !strstr(err, "workspace"), "stderr: %s", err);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}

@@ -35,8 +35,9 @@ typedef struct {
     double v_max;         /* [m/s] relative speed below which it is at rest, default 1e-3 */
     double w_max;         /* [rad/s] relative angular speed, default 0.05 */
     double dwell;         /* [s] the contact set must hold this long, default 0.2 */
-    double workspace;     /* [m] escape radius about the palm centre; 0 = 1.5 x (palm half-diagonal
-                             + the longest finger's reach), computed at init */
+    double workspace;     /* [m] escape radius about the palm centre; 0 = 1.5 x the larger of (the
+                             hand's reach + the arm's stretched length to the palm, for a hand
+                             mounted on an arm) and the object's initial distance, computed at init */
     int feature;          /* shape of the object that is to be grasped (a handrail's bar): its
                              centre is the point tested for enclosure; -1 = the object's CoM */
     int palm;             /* palm body: the fingers are its child links; -1 = the hand's base

@@ -260,6 +260,26 @@ static void warn_initial_overlap(const char *scenario, const cd_model *m, const 
     if (cli_initial_overlap(m, d, msg, sizeof msg)) fprintf(stderr, "capdyn: warning: %s: %s\n", scenario, msg);
 }
 
+/* An object that starts outside the capture workspace (a sphere of radius
+ * [capture] workspace about the palm centre) is 'escaped' at t = 0: one line
+ * on stderr, the run goes on */
+static void warn_workspace(const char *scenario, const cd_scenario *sc, const cd_data *d)
+{
+    const cd_model *m = sc->model;
+    cd_monitor_opts op;
+    cd_monitor mo;
+    cd_error e;
+    if (sc->capture_hand < 0 || sc->capture_object < 0) return;
+    op = cd_scenario_monitor_opts(sc);
+    if (cd_monitor_init(&mo, m, d, &op, &e) != CD_OK) return;
+    cd_monitor_update(&mo, m, d);
+    if (mo.verdict != CD_VERDICT_ESCAPED) return;
+    fprintf(stderr,
+            "capdyn: warning: %s: the object '%s' starts %.4g m from the palm centre, outside the capture workspace "
+            "([capture] workspace = %g m): the verdict is 'escaped' at t = 0\n",
+            scenario, m->sys_name[op.object], mo.offset_norm, mo.opt.workspace);
+}
+
 /* A tumbling rate that costs far more steps than the run would otherwise
  * take (cd_spin_steps, build.h: roughly; more than 1e5 steps and 10 times
  * the run's least steps): one line on stderr, the run goes on */
@@ -297,6 +317,7 @@ int cmd_check(int argc, char **argv)
     {   /* the initial pose: an object that starts inside a finger */
         cd_data *d = cd_data_create(m, 0, &err);
         if (d) warn_initial_overlap(o.scenario, m, d);
+        if (d) warn_workspace(o.scenario, sc, d);
         cd_data_free(d);
     }
     warn_fast_spin(o.scenario, sc);
@@ -548,6 +569,7 @@ static int run_setup(run_opts *o, cd_scenario **scp, cd_data **dp, cd_ctrl **ctl
         return CLI_FAIL;
     }
     warn_initial_overlap(o->scenario, m, d);
+    warn_workspace(o->scenario, sc, d);
     warn_fast_spin(o->scenario, sc);
     /* the scenario's built-in controller ([control], docs/capture.md) */
     if (sc->control && !(*ctlp = ctl = cd_ctrl_create(m, sc->control, &err))) {

@@ -275,7 +275,25 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
             if (s > reach) reach = s;
         }
     mo->reach = reach;
-    if (mo->opt.workspace <= 0) mo->opt.workspace = 1.5 * reach;
+    if (mo->opt.workspace <= 0) {
+        /* the default escape radius: the palm of a hand mounted on an arm is
+         * carried by the arm, so an object may still be grasped as far from
+         * the palm as the arm reaches (the joint-origin offsets from the
+         * first arm joint to the palm centre, summed: its fully stretched
+         * length) plus the hand's reach; never less than the object's CoM
+         * distance from the palm at the start (an object does not escape at
+         * t = 0); margin 1.5 (docs/grippers.md) */
+        double arm = 0, r0[3], d0;
+        int b0 = m->sys_body_adr[mo->opt.hand];
+        if (hb != b0) {
+            arm = cd_v3_norm(mo->opt.palm_pos);
+            for (k = hb; k >= 0 && m->body_parent[k] >= 0 && m->body_parent[k] != b0; k = m->body_parent[k])
+                arm += cd_v3_norm(m->body_jnt_pos + 3 * k);
+        }
+        cd_v3_sub(r0, d->body_c + 3 * m->sys_body_adr[mo->opt.object], xp);
+        d0 = cd_v3_norm(r0);
+        mo->opt.workspace = 1.5 * (reach + arm > d0 ? reach + arm : d0);
+    }
     mo->verdict = CD_VERDICT_UNRESOLVED;
     mo->t_capture = mo->t_escape = NAN;
     mo->t_set = d->t;
