@@ -774,3 +774,38 @@ Test(build, shipped_capture_scenario_equals_the_c_build)
     cd_model_free(m);
     cd_scenario_free(sc);
 }
+
+/* issue 22 (b): a clutched hand whose coupling limit is not above the clutch
+ * threshold is refused (the clutch load max_j tau_j is saturated at the
+ * limit, so it would never reach the threshold and the clutch never fire) */
+Test(build, a_clutch_torque_limit_below_the_threshold_is_refused)
+{
+    cd_model *m = cd_model_create();
+    cd_hand_desc h = cd_hand_desc_default();
+    cd_contact_law law = cd_contact_law_default();
+    cd_hand hand;
+    cd_error err;
+    h.type = CD_HAND_SPACE;
+    h.clutch_threshold = 0.05;
+    h.torque_limit = 0.04;
+    cr_assert(cd_build_hand(m, &h, &hand, &err) >= 0, "%s", err.msg);
+    cr_expect_eq(cd_build_hand_drive(m, &h, &hand, &law, NULL, 0, &err), CD_EINVAL);
+    cr_expect_str_eq(err.msg, "hand: the coupling torque limit 0.04 N m (torque_limit) must exceed the clutch threshold "
+                              "0.05 N m, or the clutch never disengages");
+    cd_model_free(m);
+    /* the motor's stall torque is the limit when torque_limit is 0 */
+    m = cd_model_create();
+    h.torque_limit = 0;
+    h.stall_torque = 0.05;
+    cr_assert(cd_build_hand(m, &h, &hand, &err) >= 0, "%s", err.msg);
+    cr_expect_eq(cd_build_hand_drive(m, &h, &hand, &law, NULL, 0, &err), CD_EINVAL);
+    cr_expect_str_eq(err.msg, "hand: the coupling torque limit 0.05 N m (the motor's stall torque) must exceed the clutch "
+                              "threshold 0.05 N m, or the clutch never disengages");
+    cd_model_free(m);
+    /* just above: accepted */
+    m = cd_model_create();
+    h.stall_torque = 0.051;
+    cr_assert(cd_build_hand(m, &h, &hand, &err) >= 0, "%s", err.msg);
+    cr_expect_eq(cd_build_hand_drive(m, &h, &hand, &law, NULL, 0, &err), CD_OK, "%s", err.msg);
+    cd_model_free(m);
+}

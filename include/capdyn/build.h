@@ -190,7 +190,7 @@ typedef struct {
     double clutch_threshold;   /* [N m], default 0.05 */
     double wire_stiffness;     /* [N m/rad], default 20 */
     double wire_damping;       /* [N m s/rad]; < 0 (default) = critical for a finger about its base joint */
-    double torque_limit;       /* coupling limit [N m]; 0 (default) = the stall torque if any, else none */
+    double torque_limit;       /* coupling limit [N m]; 0 (default) = the stall torque if any, else none; a limit not above clutch_threshold is refused (the clutch could never fire) */
 } cd_hand_desc;
 
 /* The defaults listed above (by value; nothing to free). */

@@ -303,6 +303,13 @@ static int build_clutched(cd_model *m, const cd_hand_desc *h, cd_hand *hand, con
     double st[5], sq[5];
     int ns = 0;
     if (h->stall_torque > 0 && lim == 0) lim = h->stall_torque; /* the motor's stall torque limits the coupling */
+    if (lim > 0 && !(lim > h->clutch_threshold)) { /* the coupling could never reach the threshold */
+        cd_error_set(err, CD_EINVAL,
+                     "hand: the coupling torque limit %g N m (%s) must exceed the clutch threshold %g N m, "
+                     "or the clutch never disengages",
+                     lim, h->torque_limit > 0 ? "torque_limit" : "the motor's stall torque", h->clutch_threshold);
+        return -1;
+    }
     /* the motor turns the synchronising pulley: the closing cannot be
      * faster than its no-load speed */
     if (h->noload_speed > 0 && cangle / ctime > h->noload_speed) ctime = cangle / h->noload_speed;

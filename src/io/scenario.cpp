@@ -1908,6 +1908,25 @@ struct Builder {
             h.wire_damping = ct.num("wire_damping", -1, Range::NonNeg);
             h.torque_limit = ct.num("torque_limit", 0.0, Range::NonNeg);
         }
+        if (ty != "soft" && ty != "tako") {
+            /* the clutch disengages when the coupling torque reaches the
+             * threshold; a coupling limited below it never lets it fire */
+            Entry *ce = t.get("clutch");
+            Entry *le = ce && ce->val->kind == NK::Table ? ce->val->find("torque_limit") : nullptr;
+            if (h.torque_limit > 0 && !(h.torque_limit > h.clutch_threshold))
+                fail_at(le ? le->val->loc : t.n->loc, t.kp("clutch") + ".torque_limit",
+                        "expected 0 (the motor's stall torque) or a value in (clutch.threshold, inf) = (" +
+                            fmt_num(h.clutch_threshold) + ", inf) N m (a coupling limited below the threshold never disengages the clutch), got " +
+                            fmt_num(h.torque_limit));
+            if (h.torque_limit == 0 && h.stall_torque > 0 && !(h.stall_torque > h.clutch_threshold)) {
+                Entry *me = t.get("motor");
+                Entry *se = me && me->val->kind == NK::Table ? me->val->find("stall_torque") : nullptr;
+                fail_at(se ? se->val->loc : t.n->loc, t.kp("motor") + ".stall_torque",
+                        "expected a value in (clutch.threshold, inf) = (" + fmt_num(h.clutch_threshold) +
+                            ", inf) N m without clutch.torque_limit (the stall torque limits the coupling, and one below the threshold never disengages the clutch), got " +
+                            fmt_num(h.stall_torque));
+            }
+        }
         std::vector<int> targets;
         for (auto &s2 : sys)
             if (s2.is_target) targets.push_back(s2.id);
