@@ -1293,3 +1293,41 @@ Test(cli, a_target_outside_the_workspace_is_warned_about)
     free(err);
     rm_rf(dir);
 }
+
+/* issue 22 (c): with [control] attitude control on (reaction-wheel torque on
+ * the base, an external torque), the summary does not call the angular
+ * momentum conserved; with it off it does; capdyn info, which cannot tell
+ * from the file, says when it is */
+Test(cli, attitude_control_is_not_called_momentum_conserving, .timeout = 120)
+{
+    char dir[256], sc[512], h5[600], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "capture_handrail_tumbling.toml");
+    snprintf(h5, sizeof h5, "%s/a.h5", dir);
+    rc = capdyn(dir, &out, &err, "run", sc, "-o", h5, "--set", "simulation.duration=0.2", (char *)NULL);
+    cr_assert_eq(rc, 0, "%s", err);
+    cr_expect(out && strstr(out, "\n            (linear expected to be conserved: free-floating systems, no gravity; angular "
+                                 "not expected to be conserved: attitude control applies torque to the base)\n"),
+              "stdout: %s", out ? out : "(none)");
+    cr_expect(out && !strstr(out, "(expected to be conserved"), "stdout: %s", out);
+    free(out);
+    free(err);
+    out = err = NULL;
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_expect_eq(rc, 0, "%s", err);
+    cr_expect(out && strstr(out, "(expected to be conserved: free-floating systems, no gravity; angular only if "
+                                 "[control] attitude control was off: it applies torque to the base)\n"),
+              "stdout: %s", out ? out : "(none)");
+    free(out);
+    free(err);
+    out = err = NULL;
+    rc = capdyn(dir, &out, &err, "run", sc, "-o", h5, "--set", "simulation.duration=0.2", "--set",
+                "control.attitude.on=false", (char *)NULL);
+    cr_assert_eq(rc, 0, "%s", err);
+    cr_expect(out && strstr(out, "\n            (expected to be conserved: free-floating systems, no gravity)\n"),
+              "stdout: %s", out ? out : "(none)");
+    free(out);
+    free(err);
+    rm_rf(dir);
+}

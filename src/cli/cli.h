@@ -59,6 +59,7 @@ typedef struct {
     double wall;                /* wall time of the run [s] */
     const double *fn_max;       /* (nslot) max normal force over every step [N] */
     const double *ft_max;       /* (nslot) max |tangential force| over every step [N] */
+    int attitude;               /* 1: the scenario's [control] applies base attitude torque (an external torque) */
 } cli_run_extra;
 
 /* Prints the summary of a results file, src/cli/report.c (the body of `capdyn info`, and the

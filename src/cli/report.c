@@ -481,8 +481,11 @@ static void print_energy(FILE *out, const cons_drift *dr, double E_end)
     print_wrapped_kv(out, "", line);
 }
 
-/* conserved: no gravity; any_fixed: a system has a fixed base */
-static void print_momentum(FILE *out, const cons_drift *dr, int conserved, int any_fixed)
+/* conserved: no gravity; any_fixed: a system has a fixed base; torque: 1 the
+ * run's [control] applied base attitude torque (external: the reaction
+ * wheels' momentum is not modelled), 0 none, -1 unknown (capdyn info of a
+ * [control] run: the file does not record whether the attitude law was on) */
+static void print_momentum(FILE *out, const cons_drift *dr, int conserved, int any_fixed, int torque)
 {
     char line[1024];
     double v = dr->sP > 0 ? dr->dP / dr->sP : 0.0;
@@ -494,14 +497,20 @@ static void print_momentum(FILE *out, const cons_drift *dr, int conserved, int a
              "angular about the CoM: max |L - L(0)| = %.3g kg m^2/s (%.3g relative to sqrt(2 T J) = %.3g)", dr->dL, v,
              dr->sL);
     print_wrapped_kv(out, "", line);
-    if (conserved && !any_fixed)
+    if (conserved && !any_fixed && torque > 0)
+        print_wrapped_kv(out, "", "(linear expected to be conserved: free-floating systems, no gravity; angular "
+                                  "not expected to be conserved: attitude control applies torque to the base)");
+    else if (conserved && !any_fixed && torque < 0)
+        print_wrapped_kv(out, "", "(expected to be conserved: free-floating systems, no gravity; angular only if "
+                                  "[control] attitude control was off: it applies torque to the base)");
+    else if (conserved && !any_fixed)
         print_wrapped_kv(out, "", "(expected to be conserved: free-floating systems, no gravity)");
     else
         print_wrapped_kv(out, "", any_fixed ? "(not expected to be conserved: a system has a fixed base)"
                                             : "(not expected to be conserved: gravity)");
 }
 
-static void report_conservation(FILE *out, const cd_h5r *r)
+static void report_conservation(FILE *out, const cd_h5r *r, const cli_run_extra *x)
 {
     cons_series cs;
     cons_totals o;
@@ -531,7 +540,11 @@ static void report_conservation(FILE *out, const cd_h5r *r)
         cons_drift_add(&dr, &o, M, i == 0);
     }
     if (Ms) print_energy(out, &dr, o.E); /* o: the last sample */
-    print_momentum(out, &dr, conserved, any_fixed);
+    {   /* external torque: the run knows; the file only that a [control] ran */
+        double dP[3];
+        int torque = x ? (x->attitude ? 1 : 0) : cd_h5r_attr_f64v(r, "/", "capture_dP", dP, 3) == 0 ? -1 : 0;
+        print_momentum(out, &dr, conserved, any_fixed, torque);
+    }
     free(Ms);
     cons_free(r, &cs);
 }
@@ -546,6 +559,6 @@ void cli_report(FILE *out, const cd_h5r *r, const char *path, const cli_run_extr
     report_contacts(out, r, x);
     report_capture(out, r);
     report_integrator(out, r, status);
-    report_conservation(out, r);
+    report_conservation(out, r, x);
     free(status);
 }

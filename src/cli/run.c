@@ -498,7 +498,7 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
  * the file could not be written), then one line on stderr if the run did
  * not finish (msg: how it ended; wmsg: the first write error, "" if none). */
 static void run_report(const run_opts *o, const char *out, const run_ctx *ctx, const cd_data *d, cd_status st,
-                       int exitc, const char *msg, const char *wmsg)
+                       int exitc, const char *msg, const char *wmsg, int attitude)
 {
     if (!wmsg[0] && !o->quiet) {
         cd_error rerr;
@@ -508,6 +508,7 @@ static void run_report(const run_opts *o, const char *out, const run_ctx *ctx, c
             x.wall = ctx->wall0;
             x.fn_max = ctx->fn_max;
             x.ft_max = ctx->ft_max;
+            x.attitude = attitude;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
         } else {
@@ -688,7 +689,7 @@ int cmd_run(int argc, char **argv)
     else if (st == CD_EINTERRUPT && g_signal) exitc = CLI_INTERRUPT;
     else exitc = CLI_FAIL;
 
-    run_report(&o, out, &ctx, d, st, exitc, msg, wmsg);
+    run_report(&o, out, &ctx, d, st, exitc, msg, wmsg, sc->control && sc->control->attitude);
     free(ctx.fn_max);
     free(ctx.ft_max);
     cd_data_free(d);
