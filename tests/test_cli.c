@@ -1331,3 +1331,49 @@ Test(cli, attitude_control_is_not_called_momentum_conserving, .timeout = 120)
     free(err);
     rm_rf(dir);
 }
+
+/* issue 22 (d): no energy drift relative to a kinetic energy near zero: a
+ * ball at rest without gravity has T = 0 over the run; the summary gives the
+ * absolute drift (0 J) and says why there is no relative one. The moving
+ * ball still gets its relative figure. */
+Test(cli, no_relative_energy_figure_against_a_kinetic_energy_near_zero)
+{
+    char dir[256], toml[512], h5[600], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
+    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
+    write_file(toml, ball_toml);
+    rc = capdyn(dir, &out, &err, "run", toml, "-o", h5, "--set", "system.ball.velocity=[0.0, 0.0, 0.0]", (char *)NULL);
+    cr_assert_eq(rc, 0, "exit %d, stderr: %s", rc, err);
+    cr_expect(out && strstr(out, "energy      kinetic + gravitational: E(0) = 0 J, E(end) = 0 J, max |E - E(0)| = 0 J\n"
+                                 "            (no relative figure: the largest kinetic energy, 0 J, is near zero, at most "
+                                 "1e-9 of |E|; contact springs and actuator work are not in E)\n"),
+              "stdout: %s", out ? out : "(none)");
+    free(out);
+    free(err);
+    out = err = NULL;
+    /* at rest against the wall under gravity g = 9.81 m/s^2 toward it, at
+     * the spring's equilibrium (penetration m g / K = 9.81e-4 m): T stays at
+     * round-off (about 1e-29 J) while E = -m g x = 0.971 J */
+    rc = capdyn(dir, &out, &err, "run", toml, "-o", h5, "--set", "system.ball.velocity=[0.0, 0.0, 0.0]", "--set",
+                "simulation.gravity=[9.81, 0.0, 0.0]", "--set", "system.ball.position=[-0.099019, 0.0, 0.0]", (char *)NULL);
+    cr_assert_eq(rc, 0, "exit %d, stderr: %s", rc, err);
+    {
+        const char *p = out ? strstr(out, "(no relative figure: the largest kinetic energy, ") : NULL;
+        double T = p ? strtod(p + strlen("(no relative figure: the largest kinetic energy, "), NULL) : NAN;
+        cr_expect(p && strstr(out, "E(0) = 0.97137639 J") && T >= 0 && T < 1e-20 &&
+                      strstr(p, " J, is near zero, at most 1e-9 of |E|; contact springs and actuator work are not in E)\n"),
+                  "stdout: %s", out ? out : "(none)");
+    }
+    free(out);
+    free(err);
+    out = err = NULL;
+    rc = capdyn(dir, &out, &err, "run", toml, "-o", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "exit %d, stderr: %s", rc, err);
+    cr_expect(out && strstr(out, " relative to the largest kinetic energy; contact springs") && !strstr(out, "no relative figure"),
+              "stdout: %s", out ? out : "(none)");
+    free(out);
+    free(err);
+    rm_rf(dir);
+}

@@ -476,8 +476,17 @@ static void print_energy(FILE *out, const cons_drift *dr, double E_end)
     snprintf(line, sizeof line, "kinetic + gravitational: E(0) = %.9g J, E(end) = %.9g J, max |E - E(0)| = %.3g J",
              dr->E0, E_end, dr->dEmax);
     print_wrapped_kv(out, "energy", line);
-    snprintf(line, sizeof line, "(%.3g relative to the largest kinetic energy; contact springs and actuator "
-             "work are not in E)", dr->Emax_ke > 0 ? dr->dEmax / dr->Emax_ke : 0.0);
+    /* a relative figure needs a reference: a largest kinetic energy at most
+     * 1e-9 of the energy figures (|E(0)|, |E(end)|, the drift; all zero for
+     * a run at rest) is round-off, and the drift divided by it (1e12 and
+     * more) says nothing: the absolute drift above is the figure */
+    double scale = fmax(fmax(fabs(dr->E0), fabs(E_end)), dr->dEmax);
+    if (dr->Emax_ke > 1e-9 * scale && dr->Emax_ke > 0)
+        snprintf(line, sizeof line, "(%.3g relative to the largest kinetic energy; contact springs and actuator "
+                 "work are not in E)", dr->dEmax / dr->Emax_ke);
+    else
+        snprintf(line, sizeof line, "(no relative figure: the largest kinetic energy, %.3g J, is near zero, at most "
+                 "1e-9 of |E|; contact springs and actuator work are not in E)", dr->Emax_ke);
     print_wrapped_kv(out, "", line);
 }
 
