@@ -103,19 +103,6 @@ static void vpow_jac(double Jm[9], const double a[3], double K, double p)
     m3_outer_add(Jm, K * pow(na, p - 1.0) * (p - 1.0), e, e);
 }
 
-static void m3_mul(double C[9], const double A[9], const double B[9])
-{
-    double t[9];
-    int i, j, k;
-    for (i = 0; i < 3; i++)
-        for (j = 0; j < 3; j++) {
-            double s = 0;
-            for (k = 0; k < 3; k++) s += A[3 * i + k] * B[3 * k + j];
-            t[3 * i + j] = s;
-        }
-    memcpy(C, t, sizeof t);
-}
-
 /* E (3 x 4): world rotation increment of a quaternion increment,
  * dphi = 2 (w dv - dw v + v x dv) for the unit quaternion q/|q|, over |q| */
 static void quat_E(double E[12], const double *q)
@@ -203,23 +190,23 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
     *stick = d->slot_mode[k] == CD_MODE_STICK;
     if (*stick) {
         /* eq. (4): f_t = -(K_t z_t^pt + D_t v_t^qt), z_t = P R_B z, v_t = P v; z' = R_Bᵀ v_t */
-        double Dj[9], Kj[9], zw[3], zt[3], RBt[9], PR[9];
+        double Dv[9], Dj[9], Kj[9], zw[3], zt[3], RBt[9], PR[9];
         const double *z = d->y + m->ny_slot_adr + 3 * k;
-        vpow_jac(Dj, d->slot_vt + 3 * k, L->Dt, L->qt);
-        m3_mul(Dj, Dj, P);
+        vpow_jac(Dv, d->slot_vt + 3 * k, L->Dt, L->qt);
+        cd_m3_mul(Dj, Dv, P);
         for (i = 0; i < 9; i++) Av[i] -= Dj[i];
         cd_m3_mulv(zw, RB, z);
         cd_m3_mulv(zt, P, zw);
         vpow_jac(Kj, zt, L->Kt, L->pt);
-        m3_mul(PR, P, RB);
-        m3_mul(Az, Kj, PR);
+        cd_m3_mul(PR, P, RB);
+        cd_m3_mul(Az, Kj, PR);
         for (i = 0; i < 9; i++) Az[i] = -Az[i];
         for (i = 0; i < 9; i++) RBt[i] = RB[3 * (i % 3) + i / 3];
-        m3_mul(Zv, RBt, P);
+        cd_m3_mul(Zv, RBt, P);
     } else {
         /* eq. (5): f_t = -mu f_n u/|u|, u = v_a + 2 v_reg s_t, v_a = v_t - zrate s_t,
          * zrate = (mu / K_t) K p x^(p-1) xdot (the cone's elastic rate, pt = 1) */
-        double st[3], u[3], nu, uh[3], dva[9], Tm[9];
+        double st[3], u[3], nu, uh[3], dva[9], Iu[9], Tm[9];
         const double *va = d->slot_va + 3 * k;
         cd_m3_mulv(st, P, d->slot_dir + 3 * k);
         if (!(cd_v3_norm(st) > 0)) return;
@@ -234,9 +221,9 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
         /* -mu uh (df_n/dv) - mu f_n / |u| (I - uh uhᵀ) dva/dv */
         m3_outer_add(Av, L->mu_k * dfv, uh, n);
         m3_outer_add(Ap, L->mu_k * dfx, uh, n);
-        for (i = 0; i < 9; i++) Tm[i] = (i % 4 == 0) ? 1.0 : 0.0;
-        m3_outer_add(Tm, -1.0, uh, uh);
-        m3_mul(Tm, Tm, dva);
+        for (i = 0; i < 9; i++) Iu[i] = (i % 4 == 0) ? 1.0 : 0.0;
+        m3_outer_add(Iu, -1.0, uh, uh);
+        cd_m3_mul(Tm, Iu, dva);
         for (i = 0; i < 9; i++) Av[i] -= L->mu_k * fn / nu * Tm[i];
     }
 }
