@@ -8,7 +8,7 @@
 set -euo pipefail
 
 pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
-      libtomlplusplus-dev libqhull-dev libcriterion-dev gnuplot-nox strace)
+      libtomlplusplus-dev libqhull-dev libcriterion-dev liburdfdom-dev gnuplot-nox strace)
 # shellcheck disable=SC2206
 pkgs+=(${CAPDYN_EXTRA_PKGS:-})
 if [ "${1:-}" = --fuzz ]; then
