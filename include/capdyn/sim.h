@@ -129,7 +129,8 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err);
  * state), and passed to fn. The interpolation error is O(h^4 y'''') of the
  * step h, third order: below the step's own error for steps the error
  * control accepts (docs/dynamics.md, "Dense output"). The sampler's
- * evaluations are not counted in d->stats. Allocates at create only. */
+ * evaluations are not counted in d->stats; a sample's stats are the run's
+ * at the end of the step that contains it. Allocates at create only. */
 typedef struct cd_sampler cd_sampler;
 /* Called for each sample; `sample` holds the interpolated state, evaluated.
  * Return non-zero to stop (cd_sampler_update then returns it). */

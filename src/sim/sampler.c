@@ -134,6 +134,10 @@ int cd_sampler_update(cd_sampler *s, const cd_model *m, const cd_data *d, cd_sam
                 x->y[i] = h00 * s->ya[i] + h10 * h * s->fa[i] + h01 * s->yb[i] + h11 * h * s->fb[i];
             x->t = t;
             if (cd_forward(m, x) != CD_OK) return -1;
+            /* the sample carries the run's statistics (steps, evaluations,
+             * events so far, the last step): those at the end of the step
+             * that contains it; the scratch's own counts mean nothing */
+            x->stats = d->stats;
             s->k++;
             if (fn && (r = fn(m, x, user)) != 0) break;
         }
