@@ -11,8 +11,17 @@
  *          in the axes of the shape's body B (z_B, z = R_B z_B, zdot_B = R_B^T v_t) so
  *          that a sticking pair turning together carries its held force along
  *   slip:  f_t = -mu_k f_n u/|u|, u = v_a + 2 v_reg s_t   eq. (5)
- * where s_t is the slip direction anchored at the last event (projected on
- * the tangent plane) and v_a the slip velocity. The contact point's motion
+ * With a tangential damper (D_t > 0) the slip keeps the stick law's
+ * spring-damper in series with the Coulomb slider (a saturated bristle):
+ * with the trial force f_tr = K_t z_t^pt + D_t v_t^qt (the stick force it
+ * would be), s_t = f_tr/|f_tr|, the deflection z (the state, as in stick)
+ * obeys K_t z_t^pt + D_t zdot^qt = mu_k f_n s_t and the anchor slips at
+ * v_a = v_t - zdot = (|f_tr| - mu_k f_n) s_t / D_t (qt = 1): stick -> slip at
+ * |f_tr| = mu_s f_n and slip -> stick at |f_tr| = mu_k f_n - D_t v_reg are
+ * one function of the state, so no switch is undone at its instant, and z
+ * is kept through both (docs/contact.md, "Slip with a tangential damper").
+ * With D_t = 0, s_t is the slip direction anchored at the last event
+ * (projected on the tangent plane) and v_a the slip velocity. The contact point's motion
  * v_t is the slip of the anchor plus the rate of the elastic deflection that
  * the tangential spring keeps at the cone, z_el = mu_k f_n s / K_t, so
  *          v_a = v_t - (mu_k / K_t) fdot_n s_t,  fdot_n ~ K p x^(p-1) xdot
@@ -251,6 +260,45 @@ static void skip_slot(cd_data *d, int k, double x, double *zdot)
 
 static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot);
 
+/* The trial force of a slot with a tangential damper (D_t > 0): what the
+ * stick law would apply at this state, f_tr = K_t z_t^pt + D_t v_t^qt
+ * (world, tangential; the force on A is -f_tr), and its direction s (the
+ * slip direction of a slipping slot; `fallback` when f_tr = 0). */
+static double trial_force(const cd_contact_law *L, const double RB[9], const double z[3], const double n[3],
+                          const double vt[3], const double fallback[3], double s[3])
+{
+    double zw[3], zt[3], fk[3], fdv[3], ftr[3], nf;
+    cd_m3_mulv(zw, RB, z);
+    tangential(zt, zw, n);
+    vpow(fk, zt, L->Kt, L->pt);
+    vpow(fdv, vt, L->Dt, L->qt);
+    cd_v3_add(ftr, fk, fdv);
+    nf = cd_v3_norm(ftr);
+    if (nf > 0) cd_v3_scale(s, ftr, 1.0 / nf);
+    else { tangential(s, fallback, n); cd_v3_normalize(s); }
+    return nf;
+}
+
+/* The saturated bristle of a slipping slot (D_t > 0): its force
+ * K_t z_t^pt + D_t zdot^qt equals mu_k f_n s (s the slip direction, unit,
+ * tangential), which gives the deflection's rate zdot (world) and the
+ * anchor's slip velocity va = v_t - zdot. z in the shape body's axes (RB). */
+static void bristle_va(const cd_contact_law *L, const double RB[9], const double z[3], const double n[3],
+                       const double vt[3], double fn, const double s[3], double va[3], double zd_out[3])
+{
+    double zw[3], zt[3], fk[3], w[3], zd[3], nw, fc = fn > 0 ? fn : 0.0;
+    cd_m3_mulv(zw, RB, z);
+    tangential(zt, zw, n);
+    vpow(fk, zt, L->Kt, L->pt);
+    cd_v3_scale(w, s, L->mu_k * fc);
+    cd_v3_sub(w, w, fk);
+    nw = cd_v3_norm(w);
+    if (L->qt == 1.0) cd_v3_scale(zd, w, 1.0 / L->Dt);
+    else cd_v3_scale(zd, w, nw > 0 ? pow(nw / L->Dt, 1.0 / L->qt) / nw : 0.0);
+    cd_v3_sub(va, vt, zd);
+    if (zd_out) cd_v3_copy(zd_out, zd);
+}
+
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
     int g, k;
@@ -326,13 +374,25 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
             double st[3], u[3], nu;
             tangential(st, d->slot_dir + 3 * k, n);
             cd_v3_normalize(st);
-            double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd;
-            double *va = d->slot_va + 3 * k, zrate;
-            /* rate of the elastic deflection held at the cone, |z_el| = (mu_k f_n / K_t)^(1/pt) */
-            if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
-            else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
-            cd_v3_copy(va, vt);
-            cd_v3_axpy(va, -zrate, st);
+            double *va = d->slot_va + 3 * k;
+            if (L->Dt > 0) {
+                /* the bristle (K_t, D_t) saturated at the cone: its force
+                 * K_t z_t^pt + D_t zdot^qt = mu_k f_n s_t sets the deflection's
+                 * rate, and the anchor slips at v_a = v_t - zdot (header) */
+                double zd[3], fb[3];
+                cd_v3_copy(fb, st);
+                (void)trial_force(L, d->body_R + 9 * bb, z, n, vt, fb, st);
+                bristle_va(L, d->body_R + 9 * bb, z, n, vt, fn, st, va, zd);
+                cd_m3_tmulv(zdot + 3 * k, d->body_R + 9 * bb, zd);
+            } else {
+                /* no tangential damper: the deflection sits on the cone,
+                 * |z_el| = (mu_k f_n / K_t)^(1/pt), and moves at its rate */
+                double fdot = L->K * L->p * (L->p == 1.0 ? 1.0 : pow(fabs(x), L->p - 1.0)) * xd, zrate;
+                if (L->pt == 1.0) zrate = L->mu_k * fdot / L->Kt;
+                else zrate = fn > 0 ? pow(L->mu_k / L->Kt, 1.0 / L->pt) * pow(fn, 1.0 / L->pt - 1.0) * fdot / L->pt : 0.0;
+                cd_v3_copy(va, vt);
+                cd_v3_axpy(va, -zrate, st);
+            }
             cd_v3_copy(u, va);
             cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
             nu = cd_v3_norm(u);
@@ -407,6 +467,12 @@ void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, 
         double st[3];
         tangential(st, d->slot_dir + 3 * k, n);
         cd_v3_normalize(st);
+        if (L->Dt > 0) {
+            double fb[3];
+            cd_v3_copy(fb, st);
+            (void)trial_force(L, d->body_R + 9 * m->shape_body[m->slot_shape[k]], d->y + m->ny_slot_adr + 3 * k, n,
+                              d->slot_vt + 3 * k, fb, st);
+        }
         g[1] = cd_v3_dot(d->slot_va + 3 * k, st) + d->opt.v_reg;
         if (forgive && g[1] >= -1e-3 * d->opt.v_reg) g[1] = 0;
     }
@@ -439,6 +505,12 @@ int cd_contact_transition(const cd_model *m, cd_data *d, int k, int forgive, cd_
         if (nf > 0) cd_v3_scale(s, ft, -1.0 / nf);
         else if (cd_v3_norm(vt) > 0) { cd_v3_copy(s, vt); cd_v3_normalize(s); }
         else any_tangent(s, n);
+    } else if (g[1] < 0 && from == CD_MODE_SLIP && L->Dt > 0) {
+        /* the trial force fell back inside the cone (|f_tr| < mu_k f_n -
+         * D_t v_reg): stick, keeping the bristle's deflection z, so that the
+         * stick force -f_tr continues the slip's -mu_k f_n s up to D_t v_reg */
+        to = CD_MODE_STICK;
+        kind = CD_EV_SLIP_STICK;
     } else if (g[1] < 0 && from == CD_MODE_SLIP) {
         const double *vs = d->slot_va + 3 * k;
         double nv = cd_v3_norm(vs), st[3], perp[3];

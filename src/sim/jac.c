@@ -103,6 +103,15 @@ static void vpow_jac(double Jm[9], const double a[3], double K, double p)
     m3_outer_add(Jm, K * pow(na, p - 1.0) * (p - 1.0), e, e);
 }
 
+/* r = K |a|^p a/|a| (contact.c's vector law) */
+static void vpow_vec(double r[3], const double a[3], double K, double p)
+{
+    double na;
+    if (p == 1.0) { cd_v3_scale(r, a, K); return; }
+    na = cd_v3_norm(a);
+    cd_v3_scale(r, a, na > 0 ? K * pow(na, p - 1.0) : 0.0);
+}
+
 /* E (3 x 4): world rotation increment of a quaternion increment,
  * dphi = 2 (w dv - dw v + v x dv) for the unit quaternion q/|q|, over |q| */
 static void quat_E(double E[12], const double *q)
@@ -170,7 +179,7 @@ static void add_block(const cd_model *m, const cd_data *d, cd_jacw *w, int na, c
  * respect to the relative velocity, the relative displacement and the stick
  * anchor (shape-body axes); Zv: the anchor's rate against the relative velocity */
 static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9], double Ap[9], double Az[9],
-                        double Zv[9], int *stick)
+                        double Zv[9], double Zz[9], int *stick)
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     const double *n = d->slot_normal + 3 * k, *RB = d->body_R + 9 * m->shape_body[m->slot_shape[k]];
@@ -185,6 +194,7 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
     memset(Ap, 0, 9 * sizeof(double));
     memset(Az, 0, 9 * sizeof(double));
     memset(Zv, 0, 9 * sizeof(double));
+    memset(Zz, 0, 9 * sizeof(double));
     m3_outer_add(Av, -dfv, n, n);
     m3_outer_add(Ap, -dfx, n, n);
     *stick = d->slot_mode[k] == CD_MODE_STICK;
@@ -203,6 +213,50 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
         for (i = 0; i < 9; i++) Az[i] = -Az[i];
         for (i = 0; i < 9; i++) RBt[i] = RB[3 * (i % 3) + i / 3];
         cd_m3_mul(Zv, RBt, P);
+    } else if (L->Dt > 0) {
+        /* slip of the saturated bristle (contact.c): with the trial force
+         * f_tr = K_t z_t^pt + D_t v_t^qt and s = f_tr/|f_tr|, f_t = -mu f_n s and
+         * the anchor's rate z' = R_Bᵀ (v_t - v_a), v_a = (|f_tr| - mu f_n) s / D_t
+         * (the rate's law taken as linear in D_t for any qt):
+         *   df_t = -mu s df_n - mu f_n / |f_tr| (I - s sᵀ) df_tr
+         *   dv_a = (1/D_t) [(s sᵀ + c (I - s sᵀ)) df_tr - mu s df_n],  c = 1 - mu f_n / |f_tr| */
+        double Dv[9], Dj[9], Kj[9], Kz[9], zw[3], zt[3], fk[3], fd[3], ftr[3], sh[3], nf, c, Ps[9], Q[9], Tm[9];
+        double RBt[9], PR[9];
+        const double *z = d->y + m->ny_slot_adr + 3 * k, *vt = d->slot_vt + 3 * k;
+        cd_m3_mulv(zw, RB, z);
+        cd_m3_mulv(zt, P, zw);
+        vpow_jac(Kj, zt, L->Kt, L->pt);
+        vpow_jac(Dv, vt, L->Dt, L->qt);
+        vpow_vec(fk, zt, L->Kt, L->pt);
+        vpow_vec(fd, vt, L->Dt, L->qt);
+        cd_v3_add(ftr, fk, fd);
+        nf = cd_v3_norm(ftr);
+        if (!(nf > 0) || !(fn > 0)) return;
+        cd_v3_scale(sh, ftr, 1.0 / nf);
+        c = 1.0 - L->mu_k * fn / nf;
+        for (i = 0; i < 9; i++) Ps[i] = (i % 4 == 0) ? 1.0 : 0.0;
+        m3_outer_add(Ps, -1.0, sh, sh);                     /* I - s sᵀ */
+        cd_m3_mul(Dj, Dv, P);                               /* df_tr/dv */
+        cd_m3_mul(PR, P, RB);
+        cd_m3_mul(Kz, Kj, PR);                              /* df_tr/dz */
+        m3_outer_add(Av, L->mu_k * dfv, sh, n);
+        m3_outer_add(Ap, L->mu_k * dfx, sh, n);
+        cd_m3_mul(Tm, Ps, Dj);
+        for (i = 0; i < 9; i++) Av[i] -= L->mu_k * fn / nf * Tm[i];
+        cd_m3_mul(Tm, Ps, Kz);
+        for (i = 0; i < 9; i++) Az[i] = -L->mu_k * fn / nf * Tm[i];
+        /* Q = s sᵀ + c (I - s sᵀ); z'_world = v_t - v_a */
+        for (i = 0; i < 9; i++) Q[i] = c * Ps[i];
+        m3_outer_add(Q, 1.0, sh, sh);
+        for (i = 0; i < 9; i++) RBt[i] = RB[3 * (i % 3) + i / 3];
+        cd_m3_mul(Tm, Q, Dj);
+        for (i = 0; i < 9; i++) Tm[i] = P[i] - Tm[i] / L->Dt;
+        m3_outer_add(Tm, -L->mu_k * dfv / L->Dt, sh, n);   /* -(1/D_t)(-mu s df_n/dv), df_n/dv = -dfv nᵀ */
+        cd_m3_mul(Zv, RBt, Tm);
+        cd_m3_mul(Tm, Q, Kz);
+        for (i = 0; i < 9; i++) Tm[i] = -Tm[i] / L->Dt;
+        cd_m3_mul(Zz, RBt, Tm);
+        *stick = 2;
     } else {
         /* eq. (5): f_t = -mu f_n u/|u|, u = v_a + 2 v_reg s_t, v_a = v_t - zrate s_t,
          * zrate = (mu / K_t) K p x^(p-1) xdot (the cone's elastic rate, pt = 1) */
@@ -232,11 +286,11 @@ static void contacts(const cd_model *m, cd_data *d, cd_jacw *w, int na, double *
 {
     int k, a, b, i, j;
     for (k = 0; k < m->nslot; k++) {
-        double Av[9], Ap[9], Az[9], Zv[9], pb[3], t[3];
+        double Av[9], Ap[9], Az[9], Zv[9], Zz[9], pb[3], t[3];
         side S[2];
         int stick, zc = m->ny_slot_adr + 3 * k;
         if (d->slot_mode[k] == CD_MODE_OPEN || d->slot_geomfail[k]) continue;
-        slot_derivs(m, d, k, Av, Ap, Az, Zv, &stick);
+        slot_derivs(m, d, k, Av, Ap, Az, Zv, Zz, &stick);
         S[0].body = m->cp_body[m->slot_cp[k]];
         S[1].body = m->shape_body[m->slot_shape[k]];
         for (a = 0; a < 2; a++) {
@@ -285,6 +339,11 @@ static void contacts(const cd_model *m, cd_data *d, cd_jacw *w, int na, double *
                     J[(size_t)row * (size_t)na + col] += Y->sgn * v;
                 }
             }
+            if (stick == 2) /* a slipping bristle's own relaxation */
+                for (j = 0; j < 3; j++) {
+                    int col = w->map[zc + j];
+                    if (col >= 0) J[(size_t)row * (size_t)na + col] += Zz[3 * i + j];
+                }
         }
     }
 }

@@ -112,7 +112,9 @@ static void active_set(cd_rosw *w)
 /* The reduced solve. A structured Jacobian has the pattern of a second-order
  * system: positions move with the velocities (P rows: U columns, and the
  * quaternions' own 4x4 blocks), the anchors too (Z rows: U columns), and the
- * velocities' rows hold everything stiff. The matrix the W-method uses is
+ * velocities' rows hold everything stiff. The anchors of slipping slots with a
+ * tangential damper (the saturated bristle, contact.c) relax on their own:
+ * they join the velocities in U. The matrix the W-method uses is
  * this J without the quaternions' blocks J_PP (0.5 |w|: not stiff; a
  * W-method keeps its order with any matrix, the same one in the solve and in
  * the stage sums). Then (I - c J) x = r reduces exactly to the velocities:
@@ -132,6 +134,14 @@ static void reduce(cd_rosw *w)
             int np = m->sys_base_type[s] == CD_BASE_FREE ? 7 + nj : nj;
             if (yi >= ya && yi < ya + np) { cls = 0; break; }
             if (yi >= ya + np && yi < ya + np + m->sys_ndof[s]) { cls = 1; break; }
+        }
+        if (yi >= m->ny_slot_adr && yi < m->ny_slot_adr + 3 * m->nslot) {
+            /* a slipping bristle's anchor relaxes on its own (z' depends on z,
+             * at the rate K_t/D_t): it goes with the velocities, whose rows
+             * may depend on anything; the other anchors move with the
+             * velocities only */
+            int k = (yi - m->ny_slot_adr) / 3;
+            if (w->d->slot_mode[k] == CD_MODE_SLIP && m->law[m->slot_law[k]].Dt > 0) cls = 1;
         }
         if (cls == 0) w->iP[w->nP++] = a;
         else if (cls == 1) w->iU[w->nU++] = a;
