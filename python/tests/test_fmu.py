@@ -284,3 +284,148 @@ def test_cli_errors(tmp_path, capdyn_bin):
     md = read_model_description(path)
     assert sorted(v.name for v in md.modelVariables) == ["capture.verdict", "hand.f0_l0.tau"]
     assert validate_fmu(path) == []
+
+
+# A free-flying chaser with a two-joint arm and a soft gripper around a ball
+# that drifts sideways off-centre (it pushes the arm). The C controller
+# ([control], start = "hold", docs/capture.md) holds the arm by joint
+# impedance (w_n 2 rad/s, zeta 1) and closes the gripper from t = 0.
+CLOSED_LOOP_C = """\
+title = "An arm holds while a soft gripper closes on a ball (FMU closed loop)"
+
+[simulation]
+duration = 1.5
+gravity = [0.0, 0.0, 0.0]
+integrator = "rk8pd"
+rtol = 1e-8
+atol = 1e-10
+h_max = 1e-3
+output_dt = 0.01
+
+[contact.rule]
+k_soft = 1e3
+k_ratio = 10
+m_eff = 0.1
+zeta = 1.0
+
+[contact]
+mu_max = 0.5
+mu = 0.4
+
+[[system]]
+name = "chaser"
+base = "free"
+mass = 100.0
+inertia = [10.0, 10.0, 10.0]
+position = [0.0, 0.0, 0.0]
+
+  [[system.shape]]
+  name = "bus"
+  type = "box"
+  size = [0.4, 0.4, 0.4]
+
+  [[system.link]]
+  name = "shoulder"
+  axis = [0.0, 0.0, 1.0]
+  origin = [0.2, 0.0, 0.0]
+  mass = 2.0
+  com = [0.15, 0.0, 0.0]
+  inertia = [0.002, 0.02, 0.02]
+
+  [[system.link]]
+  name = "elbow"
+  axis = [0.0, 0.0, 1.0]
+  origin = [0.3, 0.0, 0.0]
+  mass = 1.5
+  com = [0.15, 0.0, 0.0]
+  inertia = [0.002, 0.015, 0.015]
+
+[gripper]
+type = "soft"
+hand = "two_opposed"
+system = "chaser"
+attach = "elbow"
+palm = { size = [0.12, 0.04, 0.06], position = [0.3, 0.0, 0.0], rpy_deg = [0.0, 0.0, -90.0] }
+links = [0.08, 0.07]
+masses = [0.05, 0.04]
+radius = 0.008
+spacing = 0.1
+torque = 0.3
+motor = { stall_torque = 0.5, noload_speed = 5.0 }
+close = { on = "trigger" }
+finger_joint = { spring = 0.02, damping = 0.005, limit_deg = [-5.0, 120.0] }
+
+[[target]]
+name = "target"
+mass = 0.3
+inertia = [1e-4, 1e-4, 1e-4]
+position = [0.88, 0.012, 0.0]
+velocity = [0.0, -0.02, 0.0]
+shape = { name = "ball", type = "sphere", radius = 0.03 }
+
+[control]
+type = "capture"
+start = "hold"
+fixture = "target/ball"
+grasp_point = [0.0, 0.08, 0.0]
+impedance = { frequency = 2.0, damping_ratio = 1.0 }
+
+[capture]
+object = "target"
+"""
+
+
+def test_python_pd_loop_at_100_Hz_captures_as_the_C_controller(tmp_path):
+    """fmpy steps the FMU at 100 Hz; a PD law in Python holds the arm (zero-order
+    hold, constant gains of the order of the C impedance: H_jj w_n^2, 2 zeta w_n
+    H_jj at the initial pose) and closes the gripper (the soft gripper's motor
+    commands, the torque the C controller commands). The same scenario without
+    [control] and with the gripper's own closing schedule pushed past the run.
+    The verdict equals the C run's, its time within 2 communication steps
+    (0.02 s); both hold the arm within 0.01 rad of its initial angles."""
+    c = tmp_path / "c.toml"
+    c.write_text(CLOSED_LOOP_C)
+    h5 = str(tmp_path / "c.h5")
+    run_cli("run", "-q", str(c), "-o", h5)
+    with h5py.File(h5, "r") as f:
+        verdict_c = f.attrs["capture_verdict"]
+        verdict_c = verdict_c.decode() if isinstance(verdict_c, bytes) else verdict_c
+        t_c = float(f.attrs["capture_t"])
+        q_c = f["systems/chaser/q"][:, :2]
+    assert verdict_c == "captured"
+    assert np.max(np.abs(q_c - q_c[0])) < 0.01
+    p = tmp_path / "p.toml"
+    text = CLOSED_LOOP_C[: CLOSED_LOOP_C.index("[control]")] + CLOSED_LOOP_C[CLOSED_LOOP_C.index("[capture]"):]
+    text = text.replace('close = { on = "trigger" }', "close = { start = 100.0 }")
+    p.write_text(text)
+    fmu = str(tmp_path / "p.fmu")
+    run_cli("fmu", str(p), "-o", fmu)
+    md = read_model_description(fmu)
+    v = {x.name: x.valueReference for x in md.modelVariables}
+    d = extract(fmu)
+    s = FMU2Slave(guid=md.guid, unzipDirectory=d, modelIdentifier=md.coSimulation.modelIdentifier, instanceName="pd")
+    try:
+        s.instantiate()
+        s.setupExperiment(startTime=0.0)
+        s.enterInitializationMode()
+        s.exitInitializationMode()
+        joints = ["chaser.shoulder", "chaser.elbow"]
+        q0 = np.array(s.getReal([v[j + ".q"] for j in joints]))
+        kp, kd = np.array([1.6, 0.3]), np.array([1.6, 0.3])  # [N m/rad], [N m s/rad]
+        h, dev = 0.01, 0.0
+        for k in range(150):  # 1.5 s
+            q = np.array(s.getReal([v[j + ".q"] for j in joints]))
+            qd = np.array(s.getReal([v[j + ".qd"] for j in joints]))
+            dev = max(dev, float(np.max(np.abs(q - q0))))
+            s.setReal([v[j + ".tau"] for j in joints], list(kp * (q0 - q) - kd * qd))
+            s.setReal([v["chaser/f0_motor.ctrl"], v["chaser/f1_motor.ctrl"]], [0.3, 0.3])
+            s.doStep(currentCommunicationPoint=k * h, communicationStepSize=h)
+        verdict = s.getInteger([v["capture.verdict"]])[0]
+        t_v = s.getReal([v["capture.time"]])[0]
+        assert verdict == 1  # cd_verdict: captured
+        assert abs(t_v - t_c) <= 0.02, (t_v, t_c)
+        assert dev < 0.01
+        s.terminate()
+    finally:
+        s.freeInstance()
+        shutil.rmtree(d, ignore_errors=True)
