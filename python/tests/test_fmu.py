@@ -197,11 +197,19 @@ def test_errors_reach_the_logger_and_fmi2Error(fmu_path):
     s = Logged(fmu_path)
     try:
         s.start()
+        saved = s.fmu.getFMUstate()
+        x0 = s.outputs()
         # a communication point that is not the FMU's time
         with pytest.raises(Exception):
             s.fmu.doStep(currentCommunicationPoint=0.5, communicationStepSize=DT)
-        assert s.messages and s.messages[-1][0] == 3
+        assert s.messages and s.messages[-1][0] == 3  # fmi2Error
         assert "currentCommunicationPoint 0.5 is not the FMU's time 0" in s.messages[-1][1]
+        # after fmi2Error: the outputs still read (the last good state), and
+        # fmi2SetFMUstate of an earlier state goes on from there
+        assert s.outputs() == x0
+        s.fmu.setFMUstate(saved)
+        s.fmu.doStep(currentCommunicationPoint=0.0, communicationStepSize=DT)
+        s.fmu.freeFMUstate(saved)
         # a parameter out of the loader's range: its message, naming the key
         s.fmu.reset()
         s.fmu.setReal([s.v["contact.mu"].valueReference], [-1.0])

@@ -454,7 +454,6 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
     size_t i;
     int ns, nl;
     if (!c) return fmi2Error;
-    if (c->state == ST_ERROR) return fail(c, fmi2Error, "fmi2GetReal: the instance is in an error state (fmi2Reset or free it)");
     for (i = 0; i < nvr; i++) {
         const cdf_var *v;
         if (check_vr(c, "fmi2GetReal", vr[i])) return fmi2Error;
@@ -480,7 +479,6 @@ fmi2Status fmi2GetInteger(fmi2Component comp, const fmi2ValueReference vr[], siz
     size_t i;
     int ns, nl;
     if (!c) return fmi2Error;
-    if (c->state == ST_ERROR) return fail(c, fmi2Error, "fmi2GetInteger: the instance is in an error state (fmi2Reset or free it)");
     for (i = 0; i < nvr; i++) {
         const cdf_var *v;
         if (check_vr(c, "fmi2GetInteger", vr[i])) return fmi2Error;
