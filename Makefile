@@ -46,6 +46,13 @@ CLI      = $(BUILD)/capdyn
 TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
+# the FMU binary (issue 20, docs/fmu.md; rules below "the FMU binary"):
+# FMI 2.0 headers from fmpy in the venv, when it is installed
+VENV    ?= $(BUILD)/venv
+FMI2_HDR_DIR = $(firstword $(wildcard $(VENV)/lib/python3*/site-packages/fmpy/c-code))
+FMU_DIR  = $(BUILD)/fmu/linux64
+FMU_SO   = $(FMU_DIR)/capdyn_fmu.so
+FMU_OBJ  = $(BUILD)/fmu/obj/fmu.o $(BUILD)/fmu/obj/vars.o
 
 .PHONY: all fmu deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
@@ -297,10 +304,7 @@ python-test: deps
 # $$ORIGIN. Only the fmi2* functions are exported (src/fmu/fmu.map). The FMI
 # headers are fmpy's (BSD), taken from the venv at build time, never copied
 # into the repository. capdyn fmu zips this directory into every FMU.
-FMI2_HDR_DIR = $(firstword $(wildcard $(VENV)/lib/python3*/site-packages/fmpy/c-code))
-FMU_DIR  = $(BUILD)/fmu/linux64
-FMU_SO   = $(FMU_DIR)/capdyn_fmu.so
-FMU_OBJ  = $(BUILD)/fmu/obj/fmu.o $(BUILD)/fmu/obj/vars.o
+# (FMI2_HDR_DIR, FMU_DIR, FMU_SO, FMU_OBJ: defined at the top, for `all`)
 $(BUILD)/fmu/obj/%.o: src/fmu/%.c
 	@test -n "$(FMI2_HDR_DIR)" || { echo "FMU: no FMI 2.0 headers: fmpy is not installed in $(VENV) (make python-test installs it)" >&2; exit 1; }
 	@mkdir -p $(dir $@)

@@ -292,6 +292,11 @@ def test_cli_errors(tmp_path, capdyn_bin):
     md = read_model_description(path)
     assert sorted(v.name for v in md.modelVariables) == ["capture.verdict", "hand.f0_l0.tau"]
     assert validate_fmu(path) == []
+    # the same command writes the same bytes (fixed entry times, no host data)
+    again = str(tmp_path / "again.fmu")
+    run_cli("fmu", SCEN, "-o", again, "--output", "capture.verdict", "--input", "hand.f0_l0.tau")
+    with open(path, "rb") as a, open(again, "rb") as b:
+        assert a.read() == b.read()
 
 
 # A free-flying chaser with a two-joint arm and a soft gripper around a ball
