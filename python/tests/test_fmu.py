@@ -442,3 +442,28 @@ def test_python_pd_loop_at_100_Hz_captures_as_the_C_controller(tmp_path):
     finally:
         s.freeInstance()
         shutil.rmtree(d, ignore_errors=True)
+
+
+def test_a_control_scenario_fmu_is_capdyn_run_and_offers_no_input_its_controller_owns(tmp_path):
+    """The [control] controller (start = "hold") runs inside the FMU as in
+    capdyn run: bit-identical at every communication point (2^-7 s, 0.5 s).
+    The inputs it writes (arm joint torques, the gripper motors it closes) are
+    not offered; the fingers' joint torques and the base wrenches are."""
+    c = tmp_path / "c.toml"
+    c.write_text(CLOSED_LOOP_C)
+    sets = ["--set", "simulation.output_dt=0.0078125", "--set", "simulation.duration=0.5"]
+    h5 = str(tmp_path / "c.h5")
+    run_cli("run", "-q", str(c), "-o", h5, *sets)
+    fmu = str(tmp_path / "c.fmu")
+    run_cli("fmu", str(c), "-o", fmu, *sets)
+    names = {v.name for v in read_model_description(fmu).modelVariables}
+    assert "chaser.shoulder.tau" not in names and "chaser.elbow.tau" not in names
+    assert "chaser/f0_motor.ctrl" not in names
+    assert {"chaser.f0_l0.tau", "chaser.base.torque_z", "target.base.force_y"} <= names
+    r = simulate_fmu(fmu)
+    with h5py.File(h5, "r") as f:
+        np.testing.assert_array_equal(r["time"], f["time"][:])
+        for j, n in enumerate(["shoulder", "elbow"]):
+            np.testing.assert_array_equal(r[f"chaser.{n}.q"], f["systems/chaser/q"][:, j])
+        np.testing.assert_array_equal(r["target.base.y"], f["systems/target/base_pos"][:, 1])
+        np.testing.assert_array_equal(r["chaser.base.wz"], f["systems/chaser/base_angvel"][:, 2])
