@@ -30,7 +30,7 @@ LIBS_TEST = $(shell pkg-config --libs criterion 2>/dev/null)
 CORE_SRC = $(wildcard src/math/*.c src/model/*.c src/builders/*.c src/data/*.c src/kinematics/*.c src/dynamics/*.c src/contact/*.c src/mechanism/*.c src/sim/*.c src/control/*.c)
 IO_SRC_C = $(wildcard src/io/*.c src/analysis/*.c)
 IO_SRC_CXX = $(wildcard src/io/*.cpp)
-CLI_SRC  = $(wildcard src/cli/*.c)
+CLI_SRC  = $(wildcard src/cli/*.c) src/fmu/vars.c src/fmu/zip.c
 TEST_SRC = $(wildcard tests/*.c)
 BENCH_SRC = $(wildcard bench/*.c)
 EXAMPLE_SRC = $(wildcard examples/*.c)
@@ -46,10 +46,17 @@ CLI      = $(BUILD)/capdyn
 TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
+# the FMU binary (issue 20, docs/fmu.md; rules below "the FMU binary"):
+# FMI 2.0 headers from fmpy in the venv, when it is installed
+VENV    ?= $(BUILD)/venv
+FMI2_HDR_DIR = $(firstword $(wildcard $(VENV)/lib/python3*/site-packages/fmpy/c-code))
+FMU_DIR  = $(BUILD)/fmu/linux64
+FMU_SO   = $(FMU_DIR)/capdyn_fmu.so
+FMU_OBJ  = $(BUILD)/fmu/obj/fmu.o $(BUILD)/fmu/obj/vars.o
 
-.PHONY: all deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all fmu deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
-all: check-deps $(LIB) $(CLI) shared
+all: check-deps $(LIB) $(CLI) shared $(if $(FMI2_HDR_DIR),$(FMU_SO))
 
 help:
 	@echo "make deps     install Debian packages (scripts/install-deps.sh)"
@@ -68,6 +75,7 @@ help:
 	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
 	@echo "make capture-map  the capture-success map (aim error x tumbling rate, ~25 runs; docs/capture.md)"
 	@echo "make install PREFIX=/usr/local   static and shared libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
+	@echo "make fmu      the FMU binary of capdyn fmu ($(BUILD)/fmu/linux64/; needs fmpy's FMI 2.0 headers in $(BUILD)/venv: make python-test)"
 	@echo "make python-test  the Python package (python/) in $(BUILD)/venv, its pytest suite (docs/python.md)"
 	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
@@ -282,8 +290,34 @@ VENV ?= $(BUILD)/venv
 python-test: deps
 	@$(MAKE) --no-print-directory $(CLI) $(SO) $(SO_IO)
 	@BUILD=$(BUILD) VENV=$(VENV) bash scripts/install-python-deps.sh
+	@$(MAKE) --no-print-directory fmu
 	CAPDYN_BIN=$(abspath $(CLI)) CAPDYN_ROOT=$(CURDIR) CAPDYN_BUILD=$(abspath $(BUILD)) CC="$(CC)" \
 	  $(VENV)/bin/pytest -p no:cacheprovider python/tests $(PYTEST_ARGS)
+
+# ---- the FMU binary (issue 20; docs/fmu.md) ----
+# The FMI 2.0 wrapper (src/fmu/) linked into one shared object with
+# libcapdyn_io.a and libcapdyn.a (their objects are -fPIC), GSL linked
+# statically (Debian's libgsl.a is position-independent), the other
+# non-system libraries (libccd, toml++, Qhull: no static archive in Debian;
+# GSL's CBLAS: Debian's libgslcblas.a is not -fPIC, so it cannot go into a
+# shared object; HDF5 is not needed, --as-needed drops it) copied next to it by src/fmu/bundle.sh and found through the rpath
+# $$ORIGIN. Only the fmi2* functions are exported (src/fmu/fmu.map). The FMI
+# headers are fmpy's (BSD), taken from the venv at build time, never copied
+# into the repository. capdyn fmu zips this directory into every FMU.
+# (FMI2_HDR_DIR, FMU_DIR, FMU_SO, FMU_OBJ: defined at the top, for `all`)
+$(BUILD)/fmu/obj/%.o: src/fmu/%.c
+	@test -n "$(FMI2_HDR_DIR)" || { echo "FMU: no FMI 2.0 headers: fmpy is not installed in $(VENV) (make python-test installs it)" >&2; exit 1; }
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) $(PIC_FLAGS) -fvisibility=hidden -I$(FMI2_HDR_DIR) -MMD -MP -c $< -o $@
+$(FMU_SO): $(FMU_OBJ) $(LIB_IO) $(LIB) src/fmu/fmu.map src/fmu/bundle.sh
+	@mkdir -p $(dir $@)
+	rm -f $(FMU_DIR)/*
+	$(CXX) $(OPT) -shared -Wl,--no-undefined -Wl,--as-needed -Wl,--version-script=src/fmu/fmu.map -Wl,-rpath,'$$ORIGIN' $(EXTRA_LDFLAGS) \
+	  -o $@ $(FMU_OBJ) $(LIB_IO) $(LIB) -Wl,-Bstatic -lgsl -Wl,-Bdynamic $(filter-out -lgsl,$(LIBS_IO) $(LIBS_CORE))
+	bash src/fmu/bundle.sh $@
+fmu: check-deps $(FMU_SO) $(CLI)
+# capdyn fmu finds the binary here unless CAPDYN_FMU_DIR says otherwise
+$(BUILD)/src/cli/fmu.o: CFLAGS_ALL += -DCAPDYN_FMU_DIR='"$(abspath $(FMU_DIR))"'
 
 install: check-deps $(LIB) $(LIB_IO) $(CLI) $(SO) $(SO_IO)
 	install -d $(DESTDIR)$(LIBDIR) $(DESTDIR)$(INCDIR)/capdyn $(DESTDIR)$(PCDIR) $(DESTDIR)$(BINDIR)
@@ -324,4 +358,4 @@ capture-map: deps
 clean:
 	rm -rf build build-asan build-tsan build-fuzz build-mpi figures
 
--include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)
+-include $(CORE_OBJ:.o=.d) $(IO_OBJ:.o=.d) $(CLI_OBJ:.o=.d) $(FMU_OBJ:.o=.d) $(TEST_OBJ:.o=.d) $(EXAMPLES:=.d)

@@ -55,6 +55,14 @@ cd_scenario *cd_scenario_load(const char *path, const char *const *overrides, in
  * object, feature and thresholds; hand/object -1 if it has none). */
 cd_monitor_opts cd_scenario_monitor_opts(const cd_scenario *sc);
 
+/* The run objects of a scenario as `capdyn run` makes them: *dp its data
+ * (cd_data_create with the scenario's event capacity, at the initial
+ * state), *ctlp the [control] controller created and installed on that
+ * data (NULL if the scenario has none). On failure both are NULL, nothing
+ * is left allocated and err says why (cd_data_create's or cd_ctrl_create's
+ * message; CD_EINVAL for a NULL argument). */
+cd_status cd_scenario_setup(const cd_scenario *sc, cd_data **dp, cd_ctrl **ctlp, cd_error *err);
+
 /* Frees a scenario and its model; NULL is a no-op. */
 void cd_scenario_free(cd_scenario *sc);
 

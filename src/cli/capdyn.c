@@ -4,6 +4,7 @@
  *   capdyn check SCENARIO.toml [--set k=v ...]
  *   capdyn info results.h5
  *   capdyn export results.h5 WHAT [options]
+ *   capdyn fmu SCENARIO.toml -o capture.fmu [--input|--output NAME ...] [--param KEY=VALUE ...]
  *
  * Only this program turns GSL's abort-on-error handler off (the library
  * reports errors as values and never touches the handler), and only this
@@ -35,6 +36,8 @@ static const char *top_help =
     "  export RESULTS.h5 WHAT [options]\n"
     "                     columns of text for gnuplot (time, system NAME, contacts,\n"
     "                     slot N, slots, events, diagnostics, outline, checkpoints)\n"
+    "  fmu SCENARIO.toml -o FILE.fmu [--input NAME ...] [--output NAME ...] [--param KEY=VALUE ...]\n"
+    "                     the scenario as an FMI 2.0 co-simulation FMU (docs/fmu.md)\n"
     "\n"
     "'capdyn COMMAND --help' describes a command; docs/cli.md is the manual.\n"
     "exit status: 0 success, 1 runtime error, 2 bad command line, 130 interrupted.\n";
@@ -121,7 +124,8 @@ int main(int argc, char **argv)
         if (!strcmp(argv[2], "info")) return cmd_info(2, hv);
         if (!strcmp(argv[2], "export")) return cmd_export(2, hv);
         if (!strcmp(argv[2], "sweep")) return cmd_sweep(2, hv);
-        return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep)", argv[2]);
+        if (!strcmp(argv[2], "fmu")) return cmd_fmu(2, hv);
+        return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep, fmu)", argv[2]);
     }
     if (!strcmp(cmd, "--version") || !strcmp(cmd, "-V")) {
         printf("capdyn %s\n", cd_version());
@@ -132,6 +136,7 @@ int main(int argc, char **argv)
     if (!strcmp(cmd, "info")) return isolated(cmd_info, argc - 1, argv + 1);
     if (!strcmp(cmd, "export")) return isolated(cmd_export, argc - 1, argv + 1);
     if (!strcmp(cmd, "sweep")) return cmd_sweep(argc - 1, argv + 1);
+    if (!strcmp(cmd, "fmu")) return cmd_fmu(argc - 1, argv + 1);
     if (cmd[0] == '-') return cli_usage(NULL, "unknown option '%s'", cmd);
-    return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep)", cmd);
+    return cli_usage(NULL, "unknown command '%s' (commands: run, check, info, export, sweep, fmu)", cmd);
 }

@@ -17,6 +17,7 @@ int cmd_run(int argc, char **argv);
 int cmd_check(int argc, char **argv);
 int cmd_info(int argc, char **argv);
 int cmd_export(int argc, char **argv);
+int cmd_fmu(int argc, char **argv); /* src/cli/fmu.c, docs/fmu.md */
 
 /* The state of one run's loop (src/cli/run.c): progress bar, the largest
  * contact forces of every step, the work budget. */

@@ -563,24 +563,19 @@ static int run_setup(run_opts *o, cd_scenario **scp, cd_data **dp, cd_ctrl **ctl
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
-    *dp = d = cd_data_create(m, sc->event_capacity, &err);
-    if (!d) {
-        cli_error("%s", err.msg);
+    /* the data and the [control] controller: cd_scenario_setup (io.h), the
+     * same code path as the FMU's (src/fmu/, docs/fmu.md) */
+    if (cd_scenario_setup(sc, &d, &ctl, &err) != CD_OK) {
+        if (!strncmp(err.msg, "control:", 8)) cli_error("%s: %s", o->scenario, err.msg);
+        else cli_error("%s", err.msg);
         cd_scenario_free(sc);
         return CLI_FAIL;
     }
+    *dp = d;
+    *ctlp = ctl;
     warn_initial_overlap(o->scenario, m, d);
     warn_workspace(o->scenario, sc, d);
     warn_fast_spin(o->scenario, sc);
-    /* the scenario's built-in controller ([control], docs/capture.md) */
-    if (sc->control && !(*ctlp = ctl = cd_ctrl_create(m, sc->control, &err))) {
-        cli_error("%s: %s", o->scenario, err.msg);
-        cd_data_free(d);
-        cd_ctrl_free(ctl);
-        cd_scenario_free(sc);
-        return CLI_FAIL;
-    }
-    if (ctl) cd_ctrl_install(ctl, d);
     return CLI_OK;
 }
 
