@@ -2,10 +2,13 @@
 checked with fmpy (pinned in python/requirements.txt).
 
 The scenario: scenarios/space_gripper_irregular.toml (the Space Gripper closing
-on an irregular prism, captured at 0.464 s), cut to 0.75 s, with the output
+on an irregular prism, captured at 0.445 s), cut to 0.75 s, with the output
 interval 2^-10 s: every communication point k 2^-10 and every step size are
 then exact in binary, so that the importer's t + h is capdyn run's sample time
-to the last bit and both take the same integrator steps."""
+to the last bit and both take the same integrator steps. capdyn run samples
+with simulation.sampling = "stop" (its steps end on the samples, as the FMU's
+end on the communication points): with the default "interpolate" of the auto
+stepper its samples would be interpolants between other steps."""
 import ctypes
 import os
 import shutil
@@ -23,7 +26,8 @@ from fmpy.validation import validate_fmu
 from conftest import BIN, BUILD, run_cli, scenario
 
 DT = 2.0 ** -10  # [s] communication step = capdyn run's output_dt
-SETS = ["--set", f"simulation.output_dt={DT!r}", "--set", "simulation.duration=0.75"]
+SETS = ["--set", f"simulation.output_dt={DT!r}", "--set", "simulation.duration=0.75",
+        "--set", 'simulation.sampling="stop"']
 SCEN = scenario("space_gripper_irregular.toml")
 
 
