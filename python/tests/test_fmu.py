@@ -170,7 +170,7 @@ def test_get_set_and_serialized_state_continue_bit_identical(fmu_path):
         t, _ = s.steps(0.0, 300)           # 0.29 s: the fingers touch the object
         state = s.fmu.getFMUstate()
         blob = s.fmu.serializeFMUstate(state)
-        t1, a = s.steps(t, 200)            # through the capture (0.464 s)
+        t1, a = s.steps(t, 200)            # through the capture (0.445 s)
         s.fmu.setFMUstate(state)
         t2, b = s.steps(t, 200)
         np.testing.assert_array_equal(a, b)
