@@ -47,7 +47,7 @@ TESTBIN  = $(BUILD)/capdyn_tests
 EXAMPLES = $(EXAMPLE_SRC:examples/%.c=$(BUILD)/examples/%)
 JOBS    ?= 2
 
-.PHONY: all deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all deps mpi-deps lib cli shared examples test test-long doctest python-test gltf-test plots-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI) shared
 
@@ -175,6 +175,7 @@ test: deps
 	@# the Python suite first: its venv (build/venv, with h5py) also serves the
 	@# results-file kill tests, which read every dataset of a killed file with h5py
 	@$(MAKE) --no-print-directory python-test
+	@$(MAKE) --no-print-directory gltf-test
 	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '!($(TEST_LONG))' $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
@@ -278,6 +279,15 @@ shared: $(SO) $(SO_IO)
 # against these headers and shared libraries (scripts/install-python-deps.sh,
 # Debian's python3-venv/python3-dev only when missing), then its pytest suite
 # (pytest prints its closing line). PYTEST_ARGS adds pytest options.
+
+# glTF export against the Khronos validator (npm gltf-validator, installed
+# into $(BUILD)/npm; skipped without node/npm): tests/gltf/validate.sh
+gltf-test: check-deps $(CLI)
+	@BUILD=$(BUILD) CAPDYN=$(CLI) bash tests/gltf/validate.sh
+
+# every plot script on a user-written scenario (tests/plots/run.sh)
+plots-test: check-deps $(CLI)
+	@BUILD=$(BUILD) CAPDYN=$(CLI) bash tests/plots/run.sh
 VENV ?= $(BUILD)/venv
 python-test: deps
 	@$(MAKE) --no-print-directory $(CLI) $(SO) $(SO_IO)
