@@ -175,7 +175,7 @@ test: deps
 	@# the Python suite first: its venv (build/venv, with h5py) also serves the
 	@# results-file kill tests, which read every dataset of a killed file with h5py
 	@$(MAKE) --no-print-directory python-test
-	@$(MAKE) --no-print-directory gltf-test
+	@$(MAKE) --no-print-directory gltf-test plots-test
 	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '!($(TEST_LONG))' $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))

@@ -48,6 +48,10 @@ static const char *export_help =
     "                       (part 0 link, 1 shape, 2 base-to-joint segment)\n"
     "  checkpoints          u v r mode x y z t cp body (mode: 0 open, 1 stick,\n"
     "                       2 slip, the highest of the check point's slots)\n"
+    "  edges                3-D wireframe: x y z part body (links, shape edges)\n"
+    "  forces               contacts in contact per frame: x y z fx fy fz fn ft\n"
+    "                       mode slot between body_a body_b t (force on the shape's\n"
+    "                       body; between: 1 if the two bodies' systems differ)\n"
     "  gltf                 binary glTF 2.0 (GLB) of the run: one node per body\n"
     "                       with its shapes, check points and links as a mesh,\n"
     "                       the poses as an animation; capdyn export run.h5 gltf > run.glb\n"
@@ -59,6 +63,8 @@ static const char *export_help =
     "                       last committed sample)\n"
     "                       (outline/checkpoints default: the last sample)\n"
     "  --view xy|xz|yz      projection plane of outline/checkpoints (default xy)\n"
+    "  --frame BODY         outline/checkpoints/edges/forces in the frame of BODY\n"
+    "                       (its full name system/body, or a system name: its base)\n"
     "  --precision P        significant digits (default 10)\n"
     "  --active             (contacts) only slots ever in contact\n";
 
@@ -67,6 +73,8 @@ typedef struct {
     long every, frames;
     const char *at;
     int view_u, view_v, prec, active;
+    const char *frame; /* --frame BODY: geometry in that body's frame */
+    int frame_body;    /* its id, -1 world */
 } exp_opts;
 
 typedef struct {
@@ -457,6 +465,8 @@ out:
 typedef struct {
     double *X, *R;   /* (nbody x 3), (nbody x 9) of the current frame */
     double **bx, **bq;
+    int frame;       /* --frame: poses relative to this body (-1: world) */
+    double fX[3], fR[9]; /* that body's world pose at the current sample */
 } pose_set;
 
 static void pose_frame(const cd_h5r *r, pose_set *ps, long i)
@@ -470,7 +480,34 @@ static void pose_frame(const cd_h5r *r, pose_set *ps, long i)
             cd_quat_to_m3(ps->R + 9 * (b0 + j), q);
         }
     }
+    cd_m3_identity(ps->fR);
+    ps->fX[0] = ps->fX[1] = ps->fX[2] = 0;
+    if (ps->frame >= 0 && ps->frame < r->nbody) {
+        /* every pose relative to the frame body: X' = Rf^T (X - Xf), R' = Rf^T R */
+        int b, k;
+        memcpy(ps->fX, ps->X + 3 * ps->frame, sizeof ps->fX);
+        memcpy(ps->fR, ps->R + 9 * ps->frame, sizeof ps->fR);
+        for (b = 0; b < r->nbody; b++) {
+            double d[3], Rt[9], col[3], out[3];
+            cd_v3_sub(d, ps->X + 3 * b, ps->fX);
+            cd_m3_tmulv(ps->X + 3 * b, ps->fR, d);
+            memcpy(Rt, ps->R + 9 * b, sizeof Rt);
+            for (k = 0; k < 3; k++) { /* column by column */
+                col[0] = Rt[k]; col[1] = Rt[3 + k]; col[2] = Rt[6 + k];
+                cd_m3_tmulv(out, ps->fR, col);
+                ps->R[9 * b + k] = out[0]; ps->R[9 * b + 3 + k] = out[1]; ps->R[9 * b + 6 + k] = out[2];
+            }
+        }
+    }
 }
+/* a world point / vector into the --frame body's frame (identity without it) */
+static void frame_point(const pose_set *ps, const double w[3], double p[3])
+{
+    double d[3];
+    cd_v3_sub(d, w, ps->fX);
+    cd_m3_tmulv(p, ps->fR, d);
+}
+static void frame_vec(const pose_set *ps, const double w[3], double v[3]) { cd_m3_tmulv(v, ps->fR, w); }
 
 static void to_world(const pose_set *ps, int b, const double p[3], double w[3])
 {
@@ -635,6 +672,7 @@ static int load_poses(exp_ctx *c, pose_set *ps)
     ps->R = calloc((size_t)(r->nbody ? r->nbody : 1) * 9, sizeof(double));
     ps->bx = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *ps->bx);
     ps->bq = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *ps->bq);
+    ps->frame = c->o->frame_body;
     if (!ps->X || !ps->R || !ps->bx || !ps->bq) return -1;
     for (s = 0; s < r->nsys; s++) {
         snprintf(path, sizeof path, "/systems/%s/body_x", r->sys[s].group);
@@ -1346,6 +1384,242 @@ out:
     return rc;
 }
 
+/* ---- 3-D wireframes and contact forces (for gnuplot splot) -------------------- */
+static void e_pt(exp_ctx *c, const double ctr[3], const double Rw[9], double x, double y, double z, int part, int body)
+{
+    double loc[3], w[3];
+    int p = c->o->prec;
+    loc[0] = x; loc[1] = y; loc[2] = z;
+    cd_m3_mulv(w, Rw, loc);
+    num0(ctr[0] + w[0], p);
+    num(ctr[1] + w[1], p);
+    num(ctr[2] + w[2], p);
+    printf(" %d %d\n", part, body);
+}
+/* a circle of radius r in the local plane z = z0 (axis 2), x = z0 (axis 0) or y = z0 (axis 1) */
+static void e_circle(exp_ctx *c, const double ctr[3], const double Rw[9], double r, double z0, int axis, double a0,
+                     double a1, int body)
+{
+    int i, n = NCIRC;
+    for (i = 0; i <= n; i++) {
+        double a = a0 + (a1 - a0) * i / n, u = r * cos(a), v = r * sin(a);
+        if (axis == 2) e_pt(c, ctr, Rw, u, v, z0, 1, body);
+        else if (axis == 0) e_pt(c, ctr, Rw, z0, u, v, 1, body);
+        else e_pt(c, ctr, Rw, v, z0, u, 1, body);
+    }
+    putchar('\n');
+}
+static void e_line(exp_ctx *c, const double ctr[3], const double Rw[9], const double a[3], const double b[3], int part,
+                   int body)
+{
+    e_pt(c, ctr, Rw, a[0], a[1], a[2], part, body);
+    e_pt(c, ctr, Rw, b[0], b[1], b[2], part, body);
+    putchar('\n');
+}
+
+static void shape_edges(exp_ctx *c, const pose_set *ps, int k, double extent)
+{
+    const cd_h5r *r = c->r;
+    const cd_h5r_shape *sh = r->shape + k;
+    double Rw[9], ctr[3];
+    int i, b = sh->body;
+    cd_m3_mul(Rw, ps->R + 9 * b, sh->rot);
+    to_world(ps, b, sh->pos, ctr);
+    switch (sh->type) {
+    case CD_SHAPE_SPHERE:
+        for (i = 0; i < 3; i++) e_circle(c, ctr, Rw, sh->size[0], 0, i, 0, 2 * CD_PI, b);
+        break;
+    case CD_SHAPE_CYLINDER:
+    case CD_SHAPE_CAPSULE: {
+        double rr = sh->size[0], h = sh->size[1];
+        e_circle(c, ctr, Rw, rr, -h, 2, 0, 2 * CD_PI, b);
+        e_circle(c, ctr, Rw, rr, h, 2, 0, 2 * CD_PI, b);
+        for (i = 0; i < 4; i++) {
+            double a = 0.5 * CD_PI * i, p0[3], p1[3];
+            p0[0] = p1[0] = rr * cos(a); p0[1] = p1[1] = rr * sin(a); p0[2] = -h; p1[2] = h;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        if (sh->type == CD_SHAPE_CAPSULE) { /* the end caps: half circles in the xz and yz planes */
+            int e;
+            for (e = -1; e <= 1; e += 2) {
+                int ax;
+                for (ax = 0; ax < 2; ax++) {
+                    int n;
+                    for (n = 0; n <= NCIRC / 2; n++) {
+                        double a = CD_PI * n / (NCIRC / 2), u = rr * cos(a), v = e * (h + rr * sin(a));
+                        if (ax == 0) e_pt(c, ctr, Rw, u, 0, v, 1, b);
+                        else e_pt(c, ctr, Rw, 0, u, v, 1, b);
+                    }
+                    putchar('\n');
+                }
+            }
+        }
+        break;
+    }
+    case CD_SHAPE_BOX: {
+        const double *hh = sh->size;
+        int e;
+        for (e = 0; e < 12; e++) {
+            int ax = e / 4, iu = (ax + 1) % 3, iv = (ax + 2) % 3;
+            double p0[3], p1[3];
+            p0[ax] = -hh[ax]; p1[ax] = hh[ax];
+            p0[iu] = p1[iu] = (e & 1 ? 1 : -1) * hh[iu];
+            p0[iv] = p1[iv] = (e & 2 ? 1 : -1) * hh[iv];
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        break;
+    }
+    case CD_SHAPE_CONVEX: {
+        gl_tris m;
+        gl_xf I;
+        size_t t;
+        memset(&m, 0, sizeof m);
+        memset(&I, 0, sizeof I);
+        I.R[0] = I.R[4] = I.R[8] = 1;
+        if (sh->vert_num > 0 && sh->vert_adr >= 0 && sh->vert_adr + sh->vert_num <= r->nvert)
+            tri_convex(&m, &I, r->vert + 3 * sh->vert_adr, sh->vert_num);
+        for (t = 0; t < m.n; t++) {
+            const double *v = m.v + 9 * t;
+            for (i = 0; i <= 3; i++) e_pt(c, ctr, Rw, v[3 * (i % 3)], v[3 * (i % 3) + 1], v[3 * (i % 3) + 2], 1, b);
+            putchar('\n');
+        }
+        free(m.v);
+        break;
+    }
+    case CD_SHAPE_PLANE: /* a grid of the scene's size on the boundary plane */
+        for (i = -4; i <= 4; i++) {
+            double p0[3], p1[3], s = extent * i / 4.0;
+            p0[0] = s; p0[1] = -extent; p0[2] = 0; p1[0] = s; p1[1] = extent; p1[2] = 0;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+            p0[0] = -extent; p0[1] = s; p1[0] = extent; p1[1] = s;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        break;
+    default:
+        break;
+    }
+}
+
+static int ex_edges(exp_ctx *c)
+{
+    const cd_h5r *r = c->r;
+    pose_set ps;
+    long j;
+    int b, k;
+    double I9[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, O3[3] = {0, 0, 0};
+    memset(&ps, 0, sizeof ps);
+    if (load_poses(c, &ps) < 0) {
+        free_poses(r, &ps);
+        return CLI_FAIL;
+    }
+    puts("# x y z part body");
+    printf("# 3-D polylines in the %s frame [m]; part 0 link, 1 shape, 2 base-to-joint segment; one block per "
+           "frame (gnuplot index), polylines separated by a blank line\n",
+           c->o->frame_body >= 0 ? r->body[c->o->frame_body].full_name : "world");
+    for (j = 0; j < c->nsel; j++) {
+        long i = c->sel[j];
+        double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, extent = 0;
+        pose_frame(r, &ps, i);
+        for (b = 0; b < r->nbody; b++)
+            for (k = 0; k < 3; k++) {
+                if (ps.X[3 * b + k] < lo[k]) lo[k] = ps.X[3 * b + k];
+                if (ps.X[3 * b + k] > hi[k]) hi[k] = ps.X[3 * b + k];
+            }
+        for (k = 0; k < 3; k++)
+            if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
+        if (extent < 0.1) extent = 0.1;
+        if (j > 0) fputs("\n\n", stdout);
+        printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
+        for (b = 0; b < r->nbody; b++) {
+            int ch, nchild = 0, q, has_shape = 0;
+            double tip[3] = {0, 0, 0}, best = 0, w[3];
+            for (q = 0; q < r->nshape; q++)
+                if (r->shape[q].body == b) has_shape = 1;
+            for (ch = b + 1; ch < r->nbody; ch++)
+                if (r->body[ch].parent == b) {
+                    if (r->body[b].parent >= 0 || !has_shape)
+                        e_line(c, O3, I9, ps.X + 3 * b, ps.X + 3 * ch, r->body[b].parent < 0 ? 2 : 0, b);
+                    nchild++;
+                }
+            if (nchild > 0 || r->body[b].parent < 0) continue;
+            for (q = 0; q < r->ncp; q++)
+                if (r->cp[q].body == b && nrm3(r->cp[q].pos) > best) {
+                    best = nrm3(r->cp[q].pos);
+                    memcpy(tip, r->cp[q].pos, sizeof tip);
+                }
+            if (best == 0) cd_v3_scale(tip, r->body[b].com, 2.0);
+            if (nrm3(tip) > 0) {
+                to_world(&ps, b, tip, w);
+                e_line(c, O3, I9, ps.X + 3 * b, w, 0, b);
+            }
+        }
+        for (k = 0; k < r->nshape; k++) shape_edges(c, &ps, k, extent);
+    }
+    free_poses(r, &ps);
+    return CLI_OK;
+}
+
+/* the system of a body */
+static int sys_of(const cd_h5r *r, int b) { return b >= 0 && b < r->nbody ? r->body[b].system : -1; }
+
+static int ex_forces(exp_ctx *c)
+{
+    const cd_h5r *r = c->r;
+    pose_set ps;
+    double *fn = NULL, *ft = NULL, *pt = NULL, *nr = NULL, *mode = NULL;
+    long j;
+    int k, a, p = c->o->prec, rc = CLI_OK;
+    memset(&ps, 0, sizeof ps);
+    if (load_poses(c, &ps) < 0 ||
+        (r->nslot > 0 && (!(fn = series(c, "/contacts/fn")) || !(ft = series(c, "/contacts/ft")) ||
+                          !(pt = series(c, "/contacts/point")) || !(nr = series(c, "/contacts/normal")) ||
+                          !(mode = series(c, "/contacts/mode"))))) {
+        rc = CLI_FAIL;
+        goto out;
+    }
+    puts("# x y z fx fy fz fn ft mode slot between body_a body_b t");
+    printf("# contacts in contact (mode > 0) per frame, in the %s frame: contact point [m] and the force on the "
+           "shape's body (body_b), -(fn normal + ft) [N]; between 1: body_a and body_b in different systems "
+           "(e.g. finger on target), 0: the same system (e.g. finger on finger); body names system/body\n",
+           c->o->frame_body >= 0 ? r->body[c->o->frame_body].full_name : "world");
+    for (j = 0; j < c->nsel; j++) {
+        long i = c->sel[j];
+        int nout = 0;
+        pose_frame(r, &ps, i);
+        if (j > 0) fputs("\n\n", stdout);
+        printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
+        for (k = 0; k < r->nslot; k++) {
+            size_t o = (size_t)i * r->nslot + k;
+            double f[3], x[3], fl[3];
+            int m = (int)mode[o];
+            if (m <= 0) continue;
+            for (a = 0; a < 3; a++) f[a] = -(fn[o] * nr[3 * o + a] + ft[3 * o + a]);
+            frame_point(&ps, pt + 3 * o, x);
+            frame_vec(&ps, f, fl);
+            num0(x[0], p); num(x[1], p); num(x[2], p);
+            num(fl[0], p); num(fl[1], p); num(fl[2], p);
+            num(fn[o], p);
+            num(nrm3(ft + 3 * o), p);
+            printf(" %d %d %d ", m, k, sys_of(r, r->slot[k].body_a) != sys_of(r, r->slot[k].body_b));
+            token(r->slot[k].body_a_name);
+            putchar(' ');
+            token(r->slot[k].body_b_name);
+            num(c->t[i], p);
+            putchar('\n');
+            nout++;
+        }
+        if (nout == 0) { /* gnuplot needs a row per block */
+            fputs("nan nan nan nan nan nan 0 0 0 -1 0 - -", stdout);
+            num(c->t[i], p);
+            putchar('\n');
+        }
+    }
+out:
+    free(fn); free(ft); free(pt); free(nr); free(mode);
+    free_poses(r, &ps);
+    return rc;
+}
+
 int cmd_export(int argc, char **argv)
 {
     exp_opts o;
@@ -1368,7 +1642,7 @@ int cmd_export(int argc, char **argv)
             }
             if (!strcmp(a, "--active")) { o.active = 1; continue; }
             if (!strcmp(a, "--every") || !strcmp(a, "--frames") || !strcmp(a, "--at") || !strcmp(a, "--view") ||
-                !strcmp(a, "--precision")) {
+                !strcmp(a, "--precision") || !strcmp(a, "--frame")) {
                 if (i + 1 >= argc) return cli_usage("export", "%s needs a value", a);
                 val = argv[++i];
             } else {
@@ -1380,6 +1654,8 @@ int cmd_export(int argc, char **argv)
                 if (cli_count(val, &o.frames) || o.frames < 1) return cli_usage("export", "--frames expects a positive integer, got '%s'", val);
             } else if (!strcmp(a, "--at")) {
                 o.at = val;
+            } else if (!strcmp(a, "--frame")) {
+                o.frame = val;
             } else if (!strcmp(a, "--view")) {
                 if (!strcmp(val, "xy")) { o.view_u = 0; o.view_v = 1; }
                 else if (!strcmp(val, "xz")) { o.view_u = 0; o.view_v = 2; }
@@ -1396,16 +1672,17 @@ int cmd_export(int argc, char **argv)
         pos[npos++] = a;
     }
     if (npos < 1) return cli_usage("export", "missing the results file");
-    if (npos < 2) return cli_usage("export", "missing WHAT (time, system NAME, contacts, slot N, slots, events, diagnostics, outline, checkpoints, gltf)");
+    if (npos < 2) return cli_usage("export", "missing WHAT (time, system NAME, contacts, slot N, slots, events, diagnostics, outline, checkpoints, edges, forces, gltf)");
     o.path = pos[0];
     o.what = pos[1];
     o.arg = npos > 2 ? pos[2] : NULL;
     if (!strcmp(o.what, "system") || !strcmp(o.what, "slot")) needs_arg = 1;
     else if (!strcmp(o.what, "diagnostics")) opt_arg = 1;
     else if (strcmp(o.what, "time") && strcmp(o.what, "contacts") && strcmp(o.what, "slots") && strcmp(o.what, "events") &&
-             strcmp(o.what, "outline") && strcmp(o.what, "checkpoints") && strcmp(o.what, "gltf"))
+             strcmp(o.what, "outline") && strcmp(o.what, "checkpoints") && strcmp(o.what, "gltf") &&
+             strcmp(o.what, "edges") && strcmp(o.what, "forces"))
         return cli_usage("export", "unknown WHAT '%s' (time, system NAME, contacts, slot N, slots, events, diagnostics, "
-                                   "outline, checkpoints, gltf)", o.what);
+                                   "outline, checkpoints, edges, forces, gltf)", o.what);
     if (needs_arg && !o.arg) return cli_usage("export", "'%s' needs an argument (%s)", o.what, !strcmp(o.what, "system") ? "the system name" : "the slot number");
     if (!needs_arg && !opt_arg && o.arg) return cli_usage("export", "'%s' takes no argument, got '%s'", o.what, o.arg);
     if ((o.every > 0) + (o.frames > 0) + (o.at != NULL) > 1) return cli_usage("export", "use only one of --every, --frames, --at");
@@ -1424,7 +1701,26 @@ int cmd_export(int argc, char **argv)
         cd_h5r_close(r);
         return CLI_FAIL;
     }
-    geometry = !strcmp(o.what, "outline") || !strcmp(o.what, "checkpoints");
+    geometry = !strcmp(o.what, "outline") || !strcmp(o.what, "checkpoints") || !strcmp(o.what, "edges") ||
+               !strcmp(o.what, "forces");
+    o.frame_body = -1;
+    if (o.frame) {
+        int b;
+        if (!geometry) {
+            cd_h5r_close(r);
+            free(c.t);
+            return cli_usage("export", "--frame applies to outline, checkpoints, edges and forces, not to '%s'", o.what);
+        }
+        for (b = 0; b < r->nbody && o.frame_body < 0; b++)
+            if (!strcmp(r->body[b].full_name, o.frame)) o.frame_body = b;
+        if (o.frame_body < 0) {
+            cli_error("--frame: no body '%s' in %s (bodies are named system/body, a base by its system's name)", o.frame,
+                      o.path);
+            cd_h5r_close(r);
+            free(c.t);
+            return CLI_FAIL;
+        }
+    }
     rc = select_samples(&c, geometry);
     if (rc == -2) {
         free(c.t);
@@ -1442,6 +1738,8 @@ int cmd_export(int argc, char **argv)
     else if (!strcmp(o.what, "slots")) rc = ex_slots(&c);
     else if (!strcmp(o.what, "events")) rc = ex_events(&c);
     else if (!strcmp(o.what, "diagnostics")) rc = ex_diagnostics(&c);
+    else if (!strcmp(o.what, "edges")) rc = r->n > 0 ? ex_edges(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
+    else if (!strcmp(o.what, "forces")) rc = r->n > 0 ? ex_forces(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     else if (!strcmp(o.what, "gltf")) rc = r->n > 0 ? ex_gltf(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     else if (!strcmp(o.what, "outline")) rc = r->n > 0 ? ex_outline(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     else rc = r->n > 0 ? ex_checkpoints(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
