@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Capture views of any run: renders into figures/ (git-ignored), from what
 # the results file holds (bodies, shapes, slots, names; docs/figures.md):
-#   NAME_snapshots.png  four instants (start, first contact with the target,
+#   NAME_views.png  four instants (start, first contact with the target,
 #                       half way to the end, the end): the whole scene (world
 #                       frame, top row) and a close-up of the hand and the
 #                       grasped feature in a frame fixed to the target (bottom
@@ -96,7 +96,7 @@ for run in "$@"; do
     for f in c a; do
         awk -v box="$cr" -f "$ROOT/plots/clip_edges.awk" "${p}_${f}_edges.dat" > "${p}_${f}_edges_clip.dat"
     done
-    gnuplot -c "$ROOT/plots/capture_snapshots.gp" "$p" "$OUT/${n}_snapshots.png" "$title" "$wr" "$cr" "$fref" "$lref" "$target"
+    gnuplot -c "$ROOT/plots/capture_snapshots.gp" "$p" "$OUT/${n}_views.png" "$title" "$wr" "$cr" "$fref" "$lref" "$target"
     gnuplot -c "$ROOT/plots/capture_animation.gp" "$p" "$OUT/${n}_closeup.gif" "$title" "$cr" "$fref" "$lref" "$target"
     # histories: forces on the target and within a system (slots classified by their body pair)
     "$CAPDYN" export "$h5" contacts > "${p}_contacts.dat"
@@ -128,5 +128,5 @@ for run in "$@"; do
     done
     "$CAPDYN" export "$h5" diagnostics > "${p}_diag_all.dat"
     gnuplot -c "$ROOT/plots/capture_history.gp" "$p" "$OUT/${n}_history.png" "$title" "$target" "${arm:--}" "${free# }"
-    echo "   $OUT/${n}_snapshots.png $OUT/${n}_closeup.gif $OUT/${n}_history.png (target: $target)"
+    echo "   $OUT/${n}_views.png $OUT/${n}_closeup.gif $OUT/${n}_history.png (target: $target)"
 done

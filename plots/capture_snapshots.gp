@@ -1,5 +1,5 @@
 # Capture views of four instants (plots/capture.sh writes the inputs):
-#   gnuplot -c plots/capture_snapshots.gp PREFIX OUT.png TITLE "WORLD RANGES" "CLOSE-UP RANGES" FREF LREF TARGET
+#   gnuplot -c plots/capture_snapshots.gp PREFIX OUT.png TITLE "WORLD RANGES" "CLOSE-UP RANGES" FREF LREF TARGET ["W,H"]
 # PREFIX_w_edges.dat, PREFIX_w_cps.dat: `capdyn export edges|checkpoints --at
 # T1,T2,T3,T4` (world frame); PREFIX_c_edges.dat, PREFIX_c_cps.dat,
 # PREFIX_c_forces.dat: the same and `capdyn export forces` with --frame
@@ -9,7 +9,8 @@ p = ARG1; out = ARG2; title = ARG3; wr = ARG4; cr = ARG5
 fref = real(ARG6); lref = real(ARG7); target = ARG8
 s = lref / fref
 nice(x) = (e = 10**floor(log10(x)), f = x / e, (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * e)
-set terminal pngcairo size 1800,1000 font ",10"
+# optional ARG9 "W,H": a palette PNG of that size (gnuplot's gd terminal; small files, e.g. for docs/img/)
+if (ARGC >= 9) { eval sprintf("set terminal png size %s font 'DejaVuSans,9'", ARG9) } else { set terminal pngcairo size 1800,1000 font ",10" }
 set output out
 set view equal xyz
 set view 62, 28, 0.95
@@ -18,7 +19,7 @@ set cbrange [0:2]
 unset colorbox
 set xyplane relative 0
 set tics font ",8"
-set key noenhanced font ",9" at screen 0.995, screen 0.9 right top box opaque width -2
+set key noenhanced font ",9" at screen 0.995, screen 0.9 right top box opaque
 set multiplot title title noenhanced font ",13"
 # row 1: the whole scene, world frame
 set xrange [word(wr,1):word(wr,2)]; set yrange [word(wr,3):word(wr,4)]; set zrange [word(wr,5):word(wr,6)]

@@ -41,7 +41,7 @@ gnuplot -e "set terminal pngcairo size 600,400; set output '$T/blank.png'; unset
 if python3 tests/plots/png_check.py "$T/blank.png" > /dev/null; then
     echo "plots-test: FAIL: png_check.py accepts a blank picture" >&2; exit 1
 fi
-python3 tests/plots/png_check.py "$F"/user_grasp_snapshots.png "$F"/user_grasp_history.png "$F"/user_grasp_closeup.gif \
+python3 tests/plots/png_check.py "$F"/user_grasp_views.png "$F"/user_grasp_history.png "$F"/user_grasp_closeup.gif \
     "$F"/force.png "$F"/force.svg "$F"/force_zoom.png "$F"/snapshots.png "$F"/grasp.gif "$F"/diagnostics.png
 grep -q 'target: probe' "$T/capture.log" || { echo "plots-test: FAIL: capture.sh did not find the target 'probe'" >&2; cat "$T/capture.log"; exit 1; }
 echo "plots-test: every plot script drew the user scenario"
