@@ -135,3 +135,59 @@ def test_refuses_a_terminal_and_unknown_what(tmp_path):
     p = subprocess.run([os.environ.get("CAPDYN_BIN", os.path.join(ROOT, "build", "capdyn")), "export", h5, "gltf", "x"],
                        capture_output=True, text=True)
     assert p.returncode != 0 and "'gltf' takes no argument, got 'x'" in p.stderr
+
+
+def rows(text):
+    """frames of a `capdyn export` geometry output: list of lists of split rows"""
+    frames = []
+    for line in text.splitlines():
+        if line.startswith("# frame"):
+            frames.append([])
+        elif line.strip() and not line.startswith("#") and frames:
+            frames[-1].append(line.split())
+    return frames
+
+
+def quat_R(q):
+    w, x, y, z = q / np.linalg.norm(q)
+    return np.array([[1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y)],
+                     [2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x)],
+                     [2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)]])
+
+
+def test_edges_and_forces_in_the_frame_of_the_target(tmp_path):
+    """`capdyn export edges|forces --frame BODY` (the close-up of plots/capture.sh):
+    in the probe's own frame its shapes' edges do not move while it is pushed
+    about (to 1e-9 m); the forces rows equal the results file's contacts,
+    -(fn normal + ft) rotated into the probe's frame at the contact point
+    relative to its origin (1e-7 relative: 10 printed digits); `between` is 1
+    for the hand's check points on the probe."""
+    h5 = str(tmp_path / "run.h5")
+    run_cli("run", USER, "-q", "-o", h5)
+    edges = rows(run_cli("export", h5, "edges", "--frames", "5", "--frame", "probe"))
+    own = [np.array([[float(v) for v in r[:3]] for r in f if r[4] == "0"]) for f in edges]
+    assert len(own) == 5 and own[0].shape[0] > 50
+    for f in own[1:]:
+        np.testing.assert_allclose(f, own[0], rtol=0, atol=1e-9)
+    world = rows(run_cli("export", h5, "edges", "--frames", "5"))
+    moved = [np.array([[float(v) for v in r[:3]] for r in f if r[4] == "0"]) for f in world]
+    assert np.max(np.abs(moved[-1] - moved[0])) > 1e-4   # the probe did move in the world
+    forces = rows(run_cli("export", h5, "forces", "--at", "end", "--frame", "probe", "--precision", "17"))[0]
+    with h5py.File(h5, "r") as f:
+        n = int(f.attrs["committed_samples"])
+        fn = f["contacts/fn"][n - 1]
+        ft = f["contacts/ft"][n - 1]
+        pt = f["contacts/point"][n - 1]
+        nr = f["contacts/normal"][n - 1]
+        mode = f["contacts/mode"][n - 1]
+        X = f["systems/probe/body_x"][n - 1, 0]
+        R = quat_R(f["systems/probe/body_quat"][n - 1, 0])
+    active = [k for k in range(len(mode)) if mode[k] > 0]
+    assert sorted(int(r[9]) for r in forces) == active and len(active) == 6
+    for r in forces:
+        k = int(r[9])
+        F = -(fn[k] * nr[k] + ft[k])
+        np.testing.assert_allclose([float(v) for v in r[3:6]], R.T @ F, rtol=1e-7, atol=1e-12)
+        np.testing.assert_allclose([float(v) for v in r[0:3]], R.T @ (pt[k] - X), rtol=1e-7, atol=1e-12)
+        assert float(r[6]) == pytest.approx(fn[k], rel=1e-12)
+        assert r[10] == "1" and r[11].startswith("hand/") and r[12] == "probe"
