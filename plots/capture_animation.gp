@@ -15,7 +15,7 @@ set palette defined (0 "grey60", 1 "forest-green", 2 "red")
 set cbrange [0:2]
 unset colorbox
 set xyplane relative 0
-set key noenhanced bottom center horizontal font ",9"
+set key noenhanced at screen 0.99, screen 0.88 right top vertical font ",9" box opaque
 set xrange [word(cr,1):word(cr,2)]; set yrange [word(cr,3):word(cr,4)]; set zrange [word(cr,5):word(cr,6)]
 set xtics nice((real(word(cr,2)) - real(word(cr,1))) / 3); set ytics nice((real(word(cr,4)) - real(word(cr,3))) / 3)
 set ztics nice((real(word(cr,6)) - real(word(cr,5))) / 3)
