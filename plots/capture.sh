@@ -5,7 +5,8 @@
 #                       half way to the end, the end): the whole scene (world
 #                       frame, top row) and a close-up of the hand and the
 #                       grasped feature in a frame fixed to the target (bottom
-#                       row); one set of axes per row, the same for all four
+#                       row, a cube about the hand at the instant with the
+#                       most contacts); one set of axes per row, the same for all four
 #                       panels; check points coloured by contact mode; contact
 #                       forces on the target as arrows, their scale in the legend
 #   NAME_closeup.gif    the close-up animated (60 frames, gnuplot gif animate)
@@ -70,14 +71,16 @@ for run in "$@"; do
     "$CAPDYN" export "$h5" checkpoints --frames 60 --frame "$target" > "${p}_a_cps.dat"
     "$CAPDYN" export "$h5" forces --frames 60 --frame "$target" > "${p}_a_forces.dat"
     # axes: the whole scene over the four instants; the close-up: a cube about
-    # the hand's check points and the contact points at the end, in the target's frame
+    # the hand's check points (in the target's frame) at one instant
     wr=$(awk '!/^#/ && NF >= 3 && $1 == $1 + 0 { for (k = 1; k <= 3; k++) { if (!(k in lo) || $k < lo[k]) lo[k] = $k; if (!(k in hi) || $k > hi[k]) hi[k] = $k } }
               END { for (k = 1; k <= 3; k++) { m = 0.05 * (hi[k] - lo[k]) + 1e-3; printf "%.6g %.6g ", lo[k] - m, hi[k] + m } }' \
               "${p}_w_edges.dat" <(awk '!/^#/ && NF { print $5, $6, $7 }' "${p}_w_cps.dat"))
-    cr=$(awk -v F="${p}_handcps.txt" 'BEGIN { while ((getline l < F) > 0) h[l] = 1 }
-              /^# frame/ { f++; if (f == 4) { go = 1 } }
-              go && !/^#/ && NF && ($9 in h) { pts(($5), ($6), ($7)) }
-              function pts(x, y, z) { P[++np, 1] = x; P[np, 2] = y; P[np, 3] = z }
+    # the close-up's instant: of the four, the one with the most contacts on the
+    # target (the later one if tied: the closed grasp; an escape: its first contact)
+    fc=$(awk '/^# frame/ { f++ } !/^#/ && NF && $11 == 1 { c[f]++ } END { b = 4; for (f = 4; f >= 1; f--) if (c[f] > c[b]) b = f; print b }' "${p}_c_forces.dat")
+    cr=$(awk -v F="${p}_handcps.txt" -v fc="$fc" 'BEGIN { while ((getline l < F) > 0) h[l] = 1 }
+              /^# frame/ { f++; go = f == fc }
+              go && !/^#/ && NF && ($9 in h) { P[++np, 1] = $5; P[np, 2] = $6; P[np, 3] = $7 }
               END { for (i = 1; i <= np; i++) for (k = 1; k <= 3; k++) { if (i == 1 || P[i, k] < lo[k]) lo[k] = P[i, k]; if (i == 1 || P[i, k] > hi[k]) hi[k] = P[i, k] }
                     s = 0; for (k = 1; k <= 3; k++) if (hi[k] - lo[k] > s) s = hi[k] - lo[k]
                     hh = 0.7 * s; if (hh < 0.02) hh = 0.02
