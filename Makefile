@@ -65,10 +65,12 @@ help:
 	@echo "make bench    benchmarks (bench/)"
 	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
-	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
+	@echo "make figures  run the paper, gripper and capture scenarios, render every figure into figures/ (docs/figures.md)"
 	@echo "make capture-map  the capture-success map (aim error x tumbling rate, ~25 runs; docs/capture.md)"
 	@echo "make install PREFIX=/usr/local   static and shared libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
 	@echo "make python-test  the Python package (python/) in $(BUILD)/venv, its pytest suite (docs/python.md)"
+	@echo "make plots-test   every plot script on a user-written scenario (tests/plots/, docs/figures.md)"
+	@echo "make gltf-test    capdyn export gltf against the Khronos glTF validator (npm, into $(BUILD)/npm)"
 	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
 deps:
