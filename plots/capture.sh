@@ -61,6 +61,8 @@ for run in "$@"; do
     read -r t0 t1 t3 <<< "$(awk '!/^#/ { if (n == 0) a = $1; b = $1; n++ } END { print a, b, b }' "${p}_time.dat")"
     tc=$(awk '!/^#/ && $11 == 1 { print $14; exit }' "${p}_forces_all.dat")
     [ -n "$tc" ] || tc=$(awk -v a="$t0" -v b="$t3" 'BEGIN { print a + (b - a) / 3 }')
+    # in contact from the start (an initial overlap): a tenth of the run instead
+    tc=$(awk -v a="$t0" -v b="$t3" -v c="$tc" 'BEGIN { print (c > a ? c : a + (b - a) / 10) }')
     at=$(awk -v a="$t0" -v c="$tc" -v b="$t3" 'BEGIN { printf "%.9g,%.9g,%.9g,%.9g", a, c, c + (b - c) / 2, b }')
     "$CAPDYN" export "$h5" edges --at "$at" > "${p}_w_edges.dat"
     "$CAPDYN" export "$h5" checkpoints --at "$at" > "${p}_w_cps.dat"

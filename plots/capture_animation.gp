@@ -6,6 +6,9 @@
 p = ARG1; out = ARG2; title = ARG3; cr = ARG4
 fref = real(ARG5); lref = real(ARG6); target = ARG7
 s = lref / fref
+# arrows longer than a quarter of the close-up's width are drawn at that length
+hc = (real(word(cr,2)) - real(word(cr,1))) / 4
+cap(x, y, z) = (L = s * sqrt(x*x + y*y + z*z), L > hc ? hc / L : 1.0)
 nice(x) = (e = 10**floor(log10(x)), f = x / e, (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * e)
 set terminal gif animate delay 10 size 800,700 font ",10"
 set output out
@@ -27,8 +30,8 @@ do for [i=0:n-1] {
     splot p."_a_edges_clip.dat" index i using 1:2:($4 == 1 ? $3 : NaN) with lines lc rgb "dark-orange" notitle, \
           "" index i using 1:2:($4 != 1 ? $3 : NaN) with lines lw 2 lc rgb "navy" notitle, \
           p."_a_cps.dat" index i using 5:6:7:4 with points pt 7 ps 0.7 palette notitle, \
-          p."_a_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s):($5*s):($6*s) with vectors filled head lw 2 lc rgb "red" notitle, \
-          keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N", target, lref*1000, fref), \
+          p."_a_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 2 lc rgb "red" notitle, \
+          keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N (capped at %.0f mm)", target, lref*1000, fref, hc*1000), \
           keyentry with points pt 7 lc rgb "grey60" title "open", \
           keyentry with points pt 7 lc rgb "forest-green" title "stick", \
           keyentry with points pt 7 lc rgb "red" title "slip"

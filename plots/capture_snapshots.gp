@@ -8,6 +8,9 @@
 p = ARG1; out = ARG2; title = ARG3; wr = ARG4; cr = ARG5
 fref = real(ARG6); lref = real(ARG7); target = ARG8
 s = lref / fref
+# arrows longer than a quarter of the close-up's width are drawn at that length
+hc = (real(word(cr,2)) - real(word(cr,1))) / 4
+cap(x, y, z) = (L = s * sqrt(x*x + y*y + z*z), L > hc ? hc / L : 1.0)
 nice(x) = (e = 10**floor(log10(x)), f = x / e, (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * e)
 # optional ARG9 "W,H": a palette PNG of that size (gnuplot's gd terminal; small files, e.g. for docs/img/)
 if (ARGC >= 9) { eval sprintf("set terminal png size %s font 'DejaVuSans,9'", ARG9) } else { set terminal pngcairo size 1800,1000 font ",10" }
@@ -60,9 +63,9 @@ do for [i=0:3] {
         splot p."_c_edges_clip.dat" index i using 1:2:($4 == 1 ? $3 : NaN) with lines lc rgb "dark-orange" notitle, \
               "" index i using 1:2:($4 != 1 ? $3 : NaN) with lines lw 2 lc rgb "navy" notitle, \
               p."_c_cps.dat" index i using 5:6:7:4 with points pt 7 ps 0.7 palette notitle, \
-              p."_c_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s):($5*s):($6*s) with vectors filled head lw 2 lc rgb "red" notitle, \
-              p."_c_forces.dat" index i using 1:2:($11 == 0 ? $3 : NaN):($4*s):($5*s):($6*s) with vectors filled head lw 1.5 lc rgb "purple" notitle, \
-              keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N", target, lref*1000, fref), \
+              p."_c_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 2 lc rgb "red" notitle, \
+              p."_c_forces.dat" index i using 1:2:($11 == 0 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 1.5 lc rgb "purple" notitle, \
+              keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N (capped at %.0f mm)", target, lref*1000, fref, hc*1000), \
               keyentry with vectors filled head lw 1.5 lc rgb "purple" title "force within one system", \
               keyentry with points pt 7 ps 0.8 lc rgb "grey60" title "check point: open", \
               keyentry with points pt 7 ps 0.8 lc rgb "forest-green" title "check point: stick", \
@@ -71,8 +74,8 @@ do for [i=0:3] {
         splot p."_c_edges_clip.dat" index i using 1:2:($4 == 1 ? $3 : NaN) with lines lc rgb "dark-orange" notitle, \
               "" index i using 1:2:($4 != 1 ? $3 : NaN) with lines lw 2 lc rgb "navy" notitle, \
               p."_c_cps.dat" index i using 5:6:7:4 with points pt 7 ps 0.7 palette notitle, \
-              p."_c_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s):($5*s):($6*s) with vectors filled head lw 2 lc rgb "red" notitle, \
-              p."_c_forces.dat" index i using 1:2:($11 == 0 ? $3 : NaN):($4*s):($5*s):($6*s) with vectors filled head lw 1.5 lc rgb "purple" notitle
+              p."_c_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 2 lc rgb "red" notitle, \
+              p."_c_forces.dat" index i using 1:2:($11 == 0 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 1.5 lc rgb "purple" notitle
     }
 }
 unset multiplot
