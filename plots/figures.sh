@@ -32,9 +32,9 @@ D="$OUT/data"
 # ---- progress: step names, expected wall times [s] --------------------------
 # defaults measured on the development machine (docs/figures.md, "Durations");
 # a complete run writes its own into $D/times.txt and the next run uses them
-declare -A EXPECT=([fig3]=25 [fig5]=60 [space_gripper_cylinder]=12 [space_gripper_irregular]=25
-    [space_gripper_handrail]=40 [tako_centred]=12 [tako_off_centre]=12 [soft_wrap]=45 [region]=420
-    [capture_handrail_tumbling]=30 [capture_body_offset]=30 [capture_too_fast]=15 [capture_map]=1500)
+declare -A EXPECT=([fig3]=2 [fig5]=16 [space_gripper_cylinder]=16 [space_gripper_irregular]=12
+    [space_gripper_handrail]=18 [tako_centred]=11 [tako_off_centre]=9 [soft_wrap]=35 [region]=426
+    [capture_handrail_tumbling]=17 [capture_body_offset]=42 [capture_too_fast]=21 [capture_map]=1134)
 if [ -f "$D/times.txt" ]; then
     while read -r k v; do EXPECT[$k]=$v; done < "$D/times.txt"
 fi
