@@ -29,7 +29,7 @@ awk -v S="${p}_slots.dat" -v G="${p}_groups.txt" '
     function sys(b) { sub(/\/.*/, "", b); return b }
     BEGIN { while ((getline l < S) > 0) if (l !~ /^#/) { split(l, f, " "); A[f[1]] = f[3]; B[f[1]] = f[4] } }
     /^# t / { for (k = 7; k <= NF; k += 3) { s = $k; sub(/^fn\./, "", s); c = k - 1
-                  if (sys(A[s]) != sys(B[s])) { g = "on " B[s] ": " A[s]; cls = "t" } else { g = A[s] " - " B[s]; cls = "s" }
+                  if (sys(A[s]) != sys(B[s])) { g = "on " B[s] ": " A[s]; cls = "t" } else { g = A[s] < B[s] ? A[s] " - " B[s] : B[s] " - " A[s]; cls = "s" }
                   if (!(g in gi)) { gi[g] = ++ng; gname[ng] = g; gcls[ng] = cls }
                   grp[c] = gi[g] }
               for (i = 1; i <= ng; i++) if (gcls[i] == "t") order[++no] = i
