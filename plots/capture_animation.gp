@@ -31,7 +31,7 @@ do for [i=0:n-1] {
           "" index i using 1:2:($4 != 1 ? $3 : NaN) with lines lw 2 lc rgb "navy" notitle, \
           p."_a_cps.dat" index i using 5:6:7:4 with points pt 7 ps 0.7 palette notitle, \
           p."_a_forces.dat" index i using 1:2:($11 == 1 ? $3 : NaN):($4*s*cap($4,$5,$6)):($5*s*cap($4,$5,$6)):($6*s*cap($4,$5,$6)) with vectors filled head lw 2 lc rgb "red" notitle, \
-          keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N (capped at %.0f mm)", target, lref*1000, fref, hc*1000), \
+          keyentry with vectors filled head lw 2 lc rgb "red" title sprintf("force on %s: %g mm = %g N", target, lref*1000, fref), \
           keyentry with points pt 7 lc rgb "grey60" title "open", \
           keyentry with points pt 7 lc rgb "forest-green" title "stick", \
           keyentry with points pt 7 lc rgb "red" title "slip"
