@@ -54,7 +54,7 @@ FMU_DIR  = $(BUILD)/fmu/linux64
 FMU_SO   = $(FMU_DIR)/capdyn_fmu.so
 FMU_OBJ  = $(BUILD)/fmu/obj/fmu.o $(BUILD)/fmu/obj/vars.o
 
-.PHONY: all fmu deps mpi-deps lib cli shared examples test test-long doctest python-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
+.PHONY: all fmu deps mpi-deps lib cli shared examples test test-long doctest python-test gltf-test plots-test asan tsan bench demo figures capture-map clean help check-deps install uninstall install-check
 
 all: check-deps $(LIB) $(CLI) shared $(if $(FMI2_HDR_DIR),$(FMU_SO))
 
@@ -72,11 +72,13 @@ help:
 	@echo "make bench    benchmarks (bench/)"
 	@echo "make fuzz     libFuzzer targets, FUZZ_SECONDS=N each (fuzz/fuzz.mk; installs clang)"
 	@echo "make demo     install deps, run the Fig. 5 envelope grasp and render its figures"
-	@echo "make figures  run the paper scenarios, render PNG and SVG into figures/"
+	@echo "make figures  run the paper, gripper and capture scenarios, render every figure into figures/ (docs/figures.md)"
 	@echo "make capture-map  the capture-success map (aim error x tumbling rate, ~25 runs; docs/capture.md)"
 	@echo "make install PREFIX=/usr/local   static and shared libraries, headers, capdyn.pc, capdyn-io.pc, the CLI"
 	@echo "make fmu      the FMU binary of capdyn fmu ($(BUILD)/fmu/linux64/; needs fmpy's FMI 2.0 headers in $(BUILD)/venv: make python-test)"
 	@echo "make python-test  the Python package (python/) in $(BUILD)/venv, its pytest suite (docs/python.md)"
+	@echo "make plots-test   every plot script on a user-written scenario (tests/plots/, docs/figures.md)"
+	@echo "make gltf-test    capdyn export gltf against the Khronos glTF validator (npm, into $(BUILD)/npm)"
 	@echo "make uninstall PREFIX=/usr/local removes exactly what install put there"
 
 deps:
@@ -183,6 +185,7 @@ test: deps
 	@# the Python suite first: its venv (build/venv, with h5py) also serves the
 	@# results-file kill tests, which read every dataset of a killed file with h5py
 	@$(MAKE) --no-print-directory python-test
+	@$(MAKE) --no-print-directory gltf-test plots-test
 	$(TEST_ENV) bash tests/run_tests.sh $(TESTBIN) --jobs $(JOBS) --filter '!($(TEST_LONG))' $(TEST_ARGS)
 	CAPDYN_ROOT=$(CURDIR) $(FAILALLOC)
 	@$(call run_examples,$(EXAMPLES))
@@ -286,6 +289,15 @@ shared: $(SO) $(SO_IO)
 # against these headers and shared libraries (scripts/install-python-deps.sh,
 # Debian's python3-venv/python3-dev only when missing), then its pytest suite
 # (pytest prints its closing line). PYTEST_ARGS adds pytest options.
+
+# glTF export against the Khronos validator (npm gltf-validator, installed
+# into $(BUILD)/npm; skipped without node/npm): tests/gltf/validate.sh
+gltf-test: check-deps $(CLI)
+	@BUILD=$(BUILD) CAPDYN=$(CLI) bash tests/gltf/validate.sh
+
+# every plot script on a user-written scenario (tests/plots/run.sh)
+plots-test: check-deps $(CLI)
+	@BUILD=$(BUILD) CAPDYN=$(CLI) bash tests/plots/run.sh
 VENV ?= $(BUILD)/venv
 python-test: deps
 	@$(MAKE) --no-print-directory $(CLI) $(SO) $(SO_IO)

@@ -14,13 +14,11 @@ mkdir -p "$OUT"
 
 echo "== 1. Paper Fig. 5: two 2-link fingers close on a free cylinder (envelope grasp)"
 "$CAPDYN" run scenarios/paper_fig5_envelope_grasp.toml -o "$OUT/fig5.h5"
-"$CAPDYN" export "$OUT/fig5.h5" contacts --active > "$OUT/fig5_contacts.dat"
-"$CAPDYN" export "$OUT/fig5.h5" events > "$OUT/fig5_events.dat"
 "$CAPDYN" export "$OUT/fig5.h5" outline --at 0,0.04,0.08,end > "$OUT/fig5_outline.dat"
 "$CAPDYN" export "$OUT/fig5.h5" checkpoints --at 0,0.04,0.08,end > "$OUT/fig5_checkpoints.dat"
-gnuplot -c plots/force_profile.gp "$OUT/fig5_contacts.dat" "$OUT/fig5_events.dat" "$OUT/fig5_force.png" \
+CAPDYN="$CAPDYN" bash plots/force_profile.sh "$OUT/fig5.h5" "$OUT/fig5_force.png" \
     "Fig. 5: contact forces of the envelope grasp"
-gnuplot -c plots/force_profile.gp "$OUT/fig5_contacts.dat" "$OUT/fig5_events.dat" "$OUT/fig5_force_closing.png" \
+CAPDYN="$CAPDYN" bash plots/force_profile.sh "$OUT/fig5.h5" "$OUT/fig5_force_closing.png" \
     "Fig. 5: closing on the cylinder (first 0.3 s)" 0.3
 gnuplot -c plots/snapshots.gp "$OUT/fig5_outline.dat" "$OUT/fig5_checkpoints.dat" "$OUT/fig5_snapshots.png" \
     "Fig. 5: envelope grasp (grey open, green stick, red slip)" 4

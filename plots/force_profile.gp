@@ -1,82 +1,92 @@
-# Force profile: normal and tangential force of every contact slot versus
-# time, slip phases shaded, events marked (paper Fig. 3 / Fig. 5 style).
-#
-# usage: gnuplot -c plots/force_profile.gp CONTACTS.dat EVENTS.dat OUT.(png|svg) ["TITLE"] [T_MAX]
-#   CONTACTS.dat  capdyn export RESULTS.h5 contacts --active
-#   EVENTS.dat    capdyn export RESULTS.h5 events
-#   T_MAX         optional upper limit of the time axis [s] (to zoom in)
-# Events are marked in a strip at the top of each panel (onset and separation
-# above the normal forces, stick -> slip and slip -> stick above the tangential).
-# Columns of CONTACTS.dat: 1 t, 2 nopen, 3 nstick, 4 nslip, 5 fn_sum, then
-# per slot j = 0..: fn at 6+3j, |ft| at 7+3j, mode at 8+3j (docs/cli.md).
-
-if (ARGC < 3) { print "usage: gnuplot -c force_profile.gp CONTACTS.dat EVENTS.dat OUT.png|OUT.svg [TITLE] [T_MAX]"; exit status 2 }
-contacts = ARG1
-events = ARG2
-out = ARG3
-ttl = (ARGC >= 4) ? ARG4 : "contact forces"
-tmax = (ARGC >= 5) ? ARG5 : ""
+# Force profile (plots/force_profile.sh writes the inputs):
+#   gnuplot -c plots/force_profile.gp PREFIX OUT.(png|svg) TITLE T_MAX NT NS "YN PKN TPN" "YT PKT TPT" "YS PKS TPS"
+# PREFIX_groups.dat: t, slip (1 if a contact on the target slips), then per
+# target group (a finger link touching another system's body) fn ft, then
+# per within-system group (a body pair of one system) fn; PREFIX_groups.txt
+# names them ("t NAME" / "s NAME"); PREFIX_events.dat: capdyn export events.
+# T_MAX: end of the time axis ("-": the run's end). Y* the panel's y maximum,
+# PK* the largest value and TP* its time (drawn as clipped marks if above Y*).
+p = ARG1; out = ARG2; ttl = ARG3; tmax = ARG4
+nt = int(ARG5); ns = int(ARG6)
+yn = real(word(ARG7,1)); pkn = real(word(ARG7,2)); tpn = real(word(ARG7,3))
+yt = real(word(ARG8,1)); pkt = real(word(ARG8,2)); tpt = real(word(ARG8,3))
+ys = real(word(ARG9,1)); pks = real(word(ARG9,2)); tps = real(word(ARG9,3))
+gname(k) = system(sprintf("awk 'NR == %d { sub(/^[ts] /, \"\"); print }' '%s_groups.txt'", k, p))
+link(k) = (g = gname(k), strstrt(g, ": ") > 0 ? g[strstrt(g, ": ") + 2:] : g)
+target = (nt > 0) ? (g = gname(1), g[4:strstrt(g, ": ") - 1]) : "the target"
 
 if (out[strlen(out)-3:] eq ".svg") {
-    set terminal svg size 1000,760 dynamic enhanced font "sans,11" background rgb "white"
+    set terminal svg size 1100,820 dynamic enhanced font "sans,11" background rgb "white"
 } else {
-    set terminal pngcairo size 1000,760 enhanced font "sans,10"
+    set terminal pngcairo size 1100,820 enhanced font "sans,10"
 }
 set output out
+stats p."_groups.dat" using 1 nooutput
+tlo = STATS_min; thi = STATS_max
+stats p."_groups.dat" using 2 nooutput
+anyslip = STATS_max > 0
+# a frictionless run (|f_t| at round-off) is drawn on the normal-force scale
+if (pkt <= 1e-9 * pkn) { yt = yn }
+if (tmax ne "-") { thi = real(tmax) }
+set xrange [tlo:thi]
 
-hdr = system("grep -m1 '^#' '".contacts."'")
-nslot = (words(hdr) - 6) / 3
-slotname(j) = word(hdr, 7 + 3*j)[4:]
-# "slot 19: hand/left2 cp 19" from the export's comment lines
-slotlabel(j) = system(sprintf("grep -m1 '^# slot %s:' '%s' | sed 's/^# //; s/ check point / cp /; s/ -> .*//'", slotname(j), contacts))
-
-# y ranges over every slot, and the sample spacing
-stats contacts using 1 nooutput
-tlo = STATS_min
-thi = STATS_max
-FN = 0.0
-FT = 0.0
-if (nslot > 0) {
-    do for [j=0:nslot-1] {
-        stats contacts using (column(6+3*j)) nooutput
-        FN = (STATS_max > FN) ? STATS_max : FN
-        stats contacts using (column(7+3*j)) nooutput
-        FT = (STATS_max > FT) ? STATS_max : FT
+# events the run has: clutch (10) and schedule (9) as thin grey lines
+ev = p."_events.dat"
+nclutch = int(system(sprintf("awk '!/^#/ && $2 == 10' '%s' | wc -l", ev)))
+nsched = int(system(sprintf("awk '!/^#/ && $2 == 9' '%s' | wc -l", ev)))
+evt = system(sprintf("awk '!/^#/ && ($2 == 10 || $2 == 9) { print $1 \":\" $2 }' '%s'", ev))
+do for [w in evt] {
+    et = real(w[1:strstrt(w, ":") - 1]); ek = int(w[strstrt(w, ":") + 1:])
+    if (et >= tlo && et <= thi) {
+        if (ek == 10) { set arrow from et, graph 0 to et, graph 1 nohead lw 0.8 lc rgb "grey45" back }
+        if (ek == 9) { set arrow from et, graph 0 to et, graph 1 nohead lw 0.8 lc rgb "grey45" dt 2 back }
     }
 }
-FN = (FN > 0) ? 1.12*FN : 1.0
-# a frictionless run (|f_t| at round-off) is drawn on the normal-force scale
-FT = (FT > 1e-9*FN) ? 1.12*FT : FN
-if (tmax ne "") { thi = real(tmax) }
-
-# events present? (stats fails on an empty file)
-nev = int(system("grep -vc '^#' '".events."' || true"))
-
-set xrange [tlo:thi]
-set grid lc rgb "#dddddd"
-set key outside right top vertical noenhanced font ",9" spacing 1.0
-set style fill solid 0.18 noborder
+set grid lc rgb "#e4e4e4"
+set key outside right top vertical noenhanced font ",9" spacing 1.0 samplen 2
+set style fill solid 0.15 noborder
 set lmargin 10
-set rmargin 28
-set multiplot layout 2,1 title ttl noenhanced
+set rmargin 30
+np = (ns > 0) ? 3 : 2
+set multiplot layout np,1 title ttl noenhanced font ",12"
 
-set ylabel "normal force f_n [N]"
-set yrange [0:FN]
+set title sprintf("normal force on %s, per check-point body, e.g. finger link (sum over its check points)", target) noenhanced
+set ylabel "f_n [N]"
+set yrange [0:yn]
 unset xlabel
-set format x ""
-plot contacts using 1:($4 > 0 ? FN : 0) with filledcurves y1=0 lc rgb "#e04040" title "slip phase", \
-     for [j=0:nslot-1] contacts using 1:(column(6+3*j)) with lines lw 1.5 title slotlabel(j), \
-     (nev > 0 ? events : NaN) using 1:($2 == 0 ? 0.975*FN : 1/0) with points pt 9 ps 0.8 lc rgb "#007000" title "onset", \
-     (nev > 0 ? events : NaN) using 1:($2 == 1 ? 0.935*FN : 1/0) with points pt 11 ps 0.8 lc rgb "#000000" title "separation", \
-     (nev > 0 ? events : NaN) using 1:($2 == 10 ? 0.895*FN : 1/0) with impulses lw 2 lc rgb "#8000a0" title "clutch"
+if (nt > 0) {
+    plot p."_groups.dat" using 1:($2 > 0 ? yn : 0) with filledcurves y1=0 lc rgb "#e04040" title (anyslip ? "a contact on the target slips" : ""), \
+         for [j=1:nt] "" using 1:(column(1+2*j)) with lines lw 1.5 title link(j), \
+         for [j=1:nt] "" using 1:(column(1+2*j) > yn ? yn : NaN) with points pt 9 ps 0.9 lc rgb "black" \
+             title (j == 1 && pkn > yn ? sprintf("above the scale (peak %.3g N at %.3g s)", pkn, tpn) : ""), \
+         NaN with lines lw 0.8 lc rgb "grey45" title (nclutch > 0 ? sprintf("clutch event (%d)", nclutch) : ""), \
+         NaN with lines lw 0.8 dt 2 lc rgb "grey45" title (nsched > 0 ? sprintf("schedule row change (%d)", nsched) : "")
+} else {
+    set label 1 "no contact with another system's body" at graph 0.5, 0.5 center
+    plot NaN notitle
+    unset label 1
+}
 
-set ylabel "tangential force |f_t| [N]"
-set yrange [0:FT]
-set xlabel "time t [s]"
-set format x "%g"
-plot contacts using 1:($4 > 0 ? FT : 0) with filledcurves y1=0 lc rgb "#e04040" title "slip phase", \
-     for [j=0:nslot-1] contacts using 1:(column(7+3*j)) with lines lw 1.5 title slotlabel(j), \
-     (nev > 0 ? events : NaN) using 1:($2 == 2 ? 0.975*FT : 1/0) with points pt 7 ps 0.6 lc rgb "#d00000" title "stick -> slip", \
-     (nev > 0 ? events : NaN) using 1:($2 == 3 ? 0.935*FT : 1/0) with points pt 6 ps 0.8 lc rgb "#0000d0" title "slip -> stick"
+set title sprintf("tangential force magnitude on %s, per check-point body (sum of |f_t|)", target) noenhanced
+set ylabel "|f_t| [N]"
+set yrange [0:yt]
+if (ns == 0) { set xlabel "time t [s]" }
+if (nt > 0) {
+    plot p."_groups.dat" using 1:($2 > 0 ? yt : 0) with filledcurves y1=0 lc rgb "#e04040" notitle, \
+         for [j=1:nt] "" using 1:(column(2+2*j)) with lines lw 1.5 title link(j), \
+         for [j=1:nt] "" using 1:(column(2+2*j) > yt ? yt : NaN) with points pt 9 ps 0.9 lc rgb "black" \
+             title (j == 1 && pkt > yt ? sprintf("above the scale (peak %.3g N at %.3g s)", pkt, tpt) : "")
+} else {
+    plot NaN notitle
+}
 
+if (ns > 0) {
+    set title "normal force between bodies of one system (finger on finger), per body pair"
+    set ylabel "f_n [N]"
+    set yrange [0:ys]
+    set xlabel "time t [s]"
+    plot for [j=1:ns] p."_groups.dat" using 1:(column(2+2*nt+j)) with lines lw 1.2 title gname(nt + j), \
+         for [j=1:ns] "" using 1:(column(2+2*nt+j) > ys ? ys : NaN) with points pt 9 ps 0.9 lc rgb "black" \
+             title (j == 1 && pks > ys ? sprintf("above the scale (peak %.3g N at %.3g s)", pks, tps) : "")
+}
 unset multiplot

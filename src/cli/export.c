@@ -12,9 +12,12 @@
 #include "cli.h"
 #include "../math/cd_math.h"
 
+#include <libqhull_r/qhull_ra.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 static const char *export_help =
     "usage: capdyn export RESULTS.h5 WHAT [options]\n"
@@ -45,6 +48,13 @@ static const char *export_help =
     "                       (part 0 link, 1 shape, 2 base-to-joint segment)\n"
     "  checkpoints          u v r mode x y z t cp body (mode: 0 open, 1 stick,\n"
     "                       2 slip, the highest of the check point's slots)\n"
+    "  edges                3-D wireframe: x y z part body (links, shape edges)\n"
+    "  forces               contacts in contact per frame: x y z fx fy fz fn ft\n"
+    "                       mode slot between body_a body_b t (force on the shape's\n"
+    "                       body; between: 1 if the two bodies' systems differ)\n"
+    "  gltf                 binary glTF 2.0 (GLB) of the run: one node per body\n"
+    "                       with its shapes, check points and links as a mesh,\n"
+    "                       the poses as an animation; capdyn export run.h5 gltf > run.glb\n"
     "\n"
     "options:\n"
     "  --every K            every K-th sample (time series default: all)\n"
@@ -53,6 +63,8 @@ static const char *export_help =
     "                       last committed sample)\n"
     "                       (outline/checkpoints default: the last sample)\n"
     "  --view xy|xz|yz      projection plane of outline/checkpoints (default xy)\n"
+    "  --frame BODY         outline/checkpoints/edges/forces in the frame of BODY\n"
+    "                       (its full name system/body, or a system name: its base)\n"
     "  --precision P        significant digits (default 10)\n"
     "  --active             (contacts) only slots ever in contact\n";
 
@@ -61,6 +73,8 @@ typedef struct {
     long every, frames;
     const char *at;
     int view_u, view_v, prec, active;
+    const char *frame; /* --frame BODY: geometry in that body's frame */
+    int frame_body;    /* its id, -1 world */
 } exp_opts;
 
 typedef struct {
@@ -451,6 +465,8 @@ out:
 typedef struct {
     double *X, *R;   /* (nbody x 3), (nbody x 9) of the current frame */
     double **bx, **bq;
+    int frame;       /* --frame: poses relative to this body (-1: world) */
+    double fX[3], fR[9]; /* that body's world pose at the current sample */
 } pose_set;
 
 static void pose_frame(const cd_h5r *r, pose_set *ps, long i)
@@ -464,7 +480,34 @@ static void pose_frame(const cd_h5r *r, pose_set *ps, long i)
             cd_quat_to_m3(ps->R + 9 * (b0 + j), q);
         }
     }
+    cd_m3_identity(ps->fR);
+    ps->fX[0] = ps->fX[1] = ps->fX[2] = 0;
+    if (ps->frame >= 0 && ps->frame < r->nbody) {
+        /* every pose relative to the frame body: X' = Rf^T (X - Xf), R' = Rf^T R */
+        int b, k;
+        memcpy(ps->fX, ps->X + 3 * ps->frame, sizeof ps->fX);
+        memcpy(ps->fR, ps->R + 9 * ps->frame, sizeof ps->fR);
+        for (b = 0; b < r->nbody; b++) {
+            double d[3], Rt[9], col[3], out[3];
+            cd_v3_sub(d, ps->X + 3 * b, ps->fX);
+            cd_m3_tmulv(ps->X + 3 * b, ps->fR, d);
+            memcpy(Rt, ps->R + 9 * b, sizeof Rt);
+            for (k = 0; k < 3; k++) { /* column by column */
+                col[0] = Rt[k]; col[1] = Rt[3 + k]; col[2] = Rt[6 + k];
+                cd_m3_tmulv(out, ps->fR, col);
+                ps->R[9 * b + k] = out[0]; ps->R[9 * b + 3 + k] = out[1]; ps->R[9 * b + 6 + k] = out[2];
+            }
+        }
+    }
 }
+/* a world point / vector into the --frame body's frame (identity without it) */
+static void frame_point(const pose_set *ps, const double w[3], double p[3])
+{
+    double d[3];
+    cd_v3_sub(d, w, ps->fX);
+    cd_m3_tmulv(p, ps->fR, d);
+}
+static void frame_vec(const pose_set *ps, const double w[3], double v[3]) { cd_m3_tmulv(v, ps->fR, w); }
 
 static void to_world(const pose_set *ps, int b, const double p[3], double w[3])
 {
@@ -629,6 +672,7 @@ static int load_poses(exp_ctx *c, pose_set *ps)
     ps->R = calloc((size_t)(r->nbody ? r->nbody : 1) * 9, sizeof(double));
     ps->bx = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *ps->bx);
     ps->bq = calloc((size_t)(r->nsys ? r->nsys : 1), sizeof *ps->bq);
+    ps->frame = c->o->frame_body;
     if (!ps->X || !ps->R || !ps->bx || !ps->bq) return -1;
     for (s = 0; s < r->nsys; s++) {
         snprintf(path, sizeof path, "/systems/%s/body_x", r->sys[s].group);
@@ -773,6 +817,809 @@ static int ex_checkpoints(exp_ctx *c)
     return CLI_OK;
 }
 
+/* ---- glTF 2.0 binary (GLB) ------------------------------------------------------ *
+ * One node per body (children of a root node that turns capdyn's z-up world
+ * into glTF's y-up), its shapes, check points and link rods as one mesh in
+ * the body frame (flat-shaded triangles), the poses of the selected samples
+ * as one animation: a LINEAR translation and rotation sampler per body.
+ * Written by hand: a 12-byte header, a JSON chunk, a BIN chunk
+ * (docs/results-format.md, "glTF export"). */
+typedef struct {
+    unsigned char *p;
+    size_t n, cap;
+    int oom;
+} gl_buf;
+
+static void gb_bytes(gl_buf *b, const void *src, size_t n)
+{
+    if (b->oom) return;
+    if (b->n + n > b->cap) {
+        size_t cap = b->cap ? b->cap : 4096;
+        unsigned char *q;
+        while (cap < b->n + n) cap *= 2;
+        q = realloc(b->p, cap);
+        if (!q) { b->oom = 1; return; }
+        b->p = q;
+        b->cap = cap;
+    }
+    memcpy(b->p + b->n, src, n);
+    b->n += n;
+}
+/* a little-endian uint32 / float32, whatever the host's byte order */
+static void gb_u32(gl_buf *b, unsigned long v)
+{
+    unsigned char c[4];
+    c[0] = (unsigned char)(v & 0xff); c[1] = (unsigned char)((v >> 8) & 0xff);
+    c[2] = (unsigned char)((v >> 16) & 0xff); c[3] = (unsigned char)((v >> 24) & 0xff);
+    gb_bytes(b, c, 4);
+}
+static void gb_f32(gl_buf *b, float f)
+{
+    unsigned long u;
+    unsigned int w;
+    memcpy(&w, &f, 4); /* float is IEEE 754 binary32 on every platform capdyn builds on */
+    u = w;
+    gb_u32(b, u);
+}
+
+/* triangles (9 doubles each, body frame) of one primitive */
+typedef struct {
+    double *v;
+    size_t n, cap;
+    int oom;
+} gl_tris;
+
+typedef struct { double R[9], p[3]; } gl_xf; /* local -> body frame */
+
+static void tri_add(gl_tris *m, const gl_xf *X, const double a[3], const double b[3], const double c[3])
+{
+    double w[9], e1[3], e2[3], n[3];
+    int k;
+    const double *pt[3];
+    pt[0] = a; pt[1] = b; pt[2] = c;
+    if (m->oom) return;
+    for (k = 0; k < 3; k++) {
+        cd_m3_mulv(w + 3 * k, X->R, pt[k]);
+        cd_v3_add(w + 3 * k, w + 3 * k, X->p);
+    }
+    cd_v3_sub(e1, w + 3, w);
+    cd_v3_sub(e2, w + 6, w);
+    cd_v3_cross(n, e1, e2);
+    /* degenerate (the pole of a sphere, a zero radius): no triangle; float32 area too */
+    if (!(nrm3(n) > 1e-12 * (cd_v3_dot(e1, e1) + cd_v3_dot(e2, e2))) || !(nrm3(n) > 1e-14)) return;
+    if (m->n + 1 > m->cap) {
+        size_t cap = m->cap ? 2 * m->cap : 256;
+        double *q = realloc(m->v, cap * 9 * sizeof *q);
+        if (!q) { m->oom = 1; return; }
+        m->v = q;
+        m->cap = cap;
+    }
+    memcpy(m->v + 9 * m->n, w, sizeof w);
+    m->n++;
+}
+
+/* a surface of revolution about local z: nring rings (radius rad[i], height
+ * z[i], bottom to top), nlon points each; closed by fans where a ring's
+ * radius is 0 (the quads there degenerate and are dropped) */
+static void tri_rings(gl_tris *m, const gl_xf *X, int nring, const double *rad, const double *z, int nlon)
+{
+    int i, j;
+    for (i = 0; i + 1 < nring; i++)
+        for (j = 0; j < nlon; j++) {
+            double a0 = 2.0 * CD_PI * j / nlon, a1 = 2.0 * CD_PI * (j + 1) / nlon;
+            double p00[3], p01[3], p11[3], p10[3];
+            p00[0] = rad[i] * cos(a0); p00[1] = rad[i] * sin(a0); p00[2] = z[i];
+            p01[0] = rad[i] * cos(a1); p01[1] = rad[i] * sin(a1); p01[2] = z[i];
+            p11[0] = rad[i + 1] * cos(a1); p11[1] = rad[i + 1] * sin(a1); p11[2] = z[i + 1];
+            p10[0] = rad[i + 1] * cos(a0); p10[1] = rad[i + 1] * sin(a0); p10[2] = z[i + 1];
+            tri_add(m, X, p00, p01, p11);
+            tri_add(m, X, p00, p11, p10);
+        }
+}
+
+#define GL_LON 24
+#define GL_LAT 12
+
+/* a sphere of radius r (capsule: half length h between the hemispheres) */
+static void tri_capsule(gl_tris *m, const gl_xf *X, double r, double h, int nlat, int nlon)
+{
+    double rad[2 * GL_LAT + 2], z[2 * GL_LAT + 2];
+    int i, n = 0;
+    for (i = 0; i <= nlat; i++) {
+        double th = CD_PI * (1.0 - (double)i / nlat); /* from the bottom pole */
+        double zz = r * cos(th), rr = r * sin(th);
+        if (h > 0 && 2 * i == nlat) { /* the equator twice: the cylinder between */
+            rad[n] = rr; z[n++] = zz - h;
+            rad[n] = rr; z[n++] = zz + h;
+            continue;
+        }
+        rad[n] = i == 0 || i == nlat ? 0.0 : rr;
+        z[n++] = zz + (2 * i < nlat ? -h : h);
+    }
+    tri_rings(m, X, n, rad, z, nlon);
+}
+
+static void tri_cylinder(gl_tris *m, const gl_xf *X, double r, double h, int nlon)
+{
+    double rad[4] = {0, r, r, 0}, z[4];
+    z[0] = -h; z[1] = -h; z[2] = h; z[3] = h;
+    tri_rings(m, X, 4, rad, z, nlon);
+}
+
+static void tri_box(gl_tris *m, const gl_xf *X, const double h[3])
+{
+    int a, s;
+    for (a = 0; a < 3; a++)
+        for (s = -1; s <= 1; s += 2) {
+            int iu = (a + 1) % 3, iv = (a + 2) % 3, t;
+            double c[4][3];
+            if (s < 0) { t = iu; iu = iv; iv = t; } /* u x v = s e_a: outward */
+            for (t = 0; t < 4; t++) {
+                double su = (t == 1 || t == 2) ? 1 : -1, sv = t >= 2 ? 1 : -1;
+                c[t][a] = s * h[a];
+                c[t][iu] = su * h[iu];
+                c[t][iv] = sv * h[iv];
+            }
+            tri_add(m, X, c[0], c[1], c[2]);
+            tri_add(m, X, c[0], c[2], c[3]);
+        }
+}
+
+/* the convex hull of a shape's vertices, triangulated by Qhull (Qt), outward */
+static int tri_convex(gl_tris *m, const gl_xf *X, const double *v, int nv)
+{
+    qhT qh_qh;
+    qhT *qh = &qh_qh;
+    facetT *facet;
+    int exitcode;
+    int curlong, totlong;
+    double *pts;
+    FILE *ferr = fopen("/dev/null", "w");
+    if (nv < 4 || !ferr) {
+        if (ferr) fclose(ferr);
+        return -1;
+    }
+    pts = malloc((size_t)nv * 3 * sizeof *pts);
+    if (!pts) { fclose(ferr); return -1; }
+    memcpy(pts, v, (size_t)nv * 3 * sizeof *pts);
+    qh_zero(qh, ferr);
+    exitcode = qh_new_qhull(qh, 3, nv, pts, False, (char *)"qhull Qt", NULL, ferr);
+    if (exitcode == qh_ERRnone) {
+        FORALLfacets {
+            vertexT *vertex, **vertexp;
+            double p[3][3], e1[3], e2[3], n[3];
+            int k = 0;
+            FOREACHvertex_(facet->vertices) {
+                if (k < 3) memcpy(p[k], vertex->point, sizeof p[k]);
+                k++;
+            }
+            if (k != 3) continue;
+            cd_v3_sub(e1, p[1], p[0]);
+            cd_v3_sub(e2, p[2], p[0]);
+            cd_v3_cross(n, e1, e2);
+            if (cd_v3_dot(n, facet->normal) >= 0) tri_add(m, X, p[0], p[1], p[2]);
+            else tri_add(m, X, p[0], p[2], p[1]);
+        }
+    }
+    qh_freeqhull(qh, !qh_ALL);
+    qh_memfreeshort(qh, &curlong, &totlong);
+    fclose(ferr);
+    free(pts);
+    return exitcode == qh_ERRnone ? 0 : -1;
+}
+
+/* a frame whose z is the unit vector d, at p */
+static void xf_along(gl_xf *X, const double p[3], const double d[3])
+{
+    double a[3] = {1, 0, 0}, x[3], y[3];
+    if (fabs(d[0]) > 0.9) { a[0] = 0; a[1] = 1; }
+    cd_v3_cross(x, a, d);
+    cd_v3_scale(x, x, 1.0 / nrm3(x));
+    cd_v3_cross(y, d, x);
+    X->R[0] = x[0]; X->R[1] = y[0]; X->R[2] = d[0];
+    X->R[3] = x[1]; X->R[4] = y[1]; X->R[5] = d[1];
+    X->R[6] = x[2]; X->R[7] = y[2]; X->R[8] = d[2];
+    memcpy(X->p, p, 3 * sizeof(double));
+}
+
+/* a rod (thin cylinder) from a to b, body frame */
+static void tri_rod(gl_tris *m, const double a[3], const double b[3], double r)
+{
+    double d[3], mid[3], L;
+    gl_xf X;
+    cd_v3_sub(d, b, a);
+    L = nrm3(d);
+    if (!(L > 1e-9)) return;
+    cd_v3_scale(d, d, 1.0 / L);
+    cd_v3_add(mid, a, b);
+    cd_v3_scale(mid, mid, 0.5);
+    xf_along(&X, mid, d);
+    tri_cylinder(m, &X, r, 0.5 * L, 8);
+}
+
+enum { GL_MAT_LINK, GL_MAT_CP, GL_MAT_PLANE, GL_MAT_SYS0 };
+#define GL_NPRIM 4 /* per body: links, check points, planes, shapes */
+
+typedef struct {
+    gl_buf bin, js;   /* js: the JSON arrays being built, as text */
+    int nacc;         /* accessors (= bufferViews: one each) */
+    FILE *acc, *views;
+    int first_acc, first_view;
+} gl_out;
+
+/* a float32 accessor of n items of ncomp components (VEC3 ...), its own
+ * bufferView; min/max are those of the float32 values written */
+static int gl_accessor(gl_out *g, const float *f, size_t n, int ncomp, int target)
+{
+    static const char *types[] = {"", "SCALAR", "VEC2", "VEC3", "VEC4"};
+    float lo[4], hi[4];
+    size_t i, off;
+    int k;
+    while (g->bin.n % 4) gb_bytes(&g->bin, "", 1);
+    off = g->bin.n;
+    for (k = 0; k < ncomp; k++) { lo[k] = HUGE_VALF; hi[k] = -HUGE_VALF; }
+    for (i = 0; i < n * (size_t)ncomp; i++) {
+        k = (int)(i % (size_t)ncomp);
+        if (f[i] < lo[k]) lo[k] = f[i];
+        if (f[i] > hi[k]) hi[k] = f[i];
+        gb_f32(&g->bin, f[i]);
+    }
+    fprintf(g->views, "%s{\"buffer\":0,\"byteOffset\":%lu,\"byteLength\":%lu", g->first_view ? "" : ",",
+            (unsigned long)off, (unsigned long)(n * (size_t)ncomp * 4));
+    if (target) fprintf(g->views, ",\"target\":%d", target);
+    fputc('}', g->views);
+    g->first_view = 0;
+    fprintf(g->acc, "%s{\"bufferView\":%d,\"componentType\":5126,\"count\":%lu,\"type\":\"%s\",\"min\":[",
+            g->first_acc ? "" : ",", g->nacc, (unsigned long)n, types[ncomp]);
+    for (k = 0; k < ncomp; k++) fprintf(g->acc, "%s%.9g", k ? "," : "", (double)lo[k]);
+    fputs("],\"max\":[", g->acc);
+    for (k = 0; k < ncomp; k++) fprintf(g->acc, "%s%.9g", k ? "," : "", (double)hi[k]);
+    fputs("]}", g->acc);
+    g->first_acc = 0;
+    return g->nacc++;
+}
+
+/* JSON string of a name (escapes quotes, backslashes and control characters) */
+static void json_str(FILE *f, const char *s)
+{
+    fputc('"', f);
+    for (; *s; s++) {
+        unsigned char ch = (unsigned char)*s;
+        if (ch == '"' || ch == '\\') fprintf(f, "\\%c", ch);
+        else if (ch < 0x20) fprintf(f, "\\u%04x", ch);
+        else fputc(ch, f);
+    }
+    fputc('"', f);
+}
+
+static int ex_gltf(exp_ctx *c)
+{
+    const cd_h5r *r = c->r;
+    pose_set ps;
+    gl_out g;
+    gl_tris prim[GL_NPRIM];
+    char *sacc = NULL, *sviews = NULL, *smesh = NULL, *snodes = NULL, *sanim = NULL, *json = NULL;
+    size_t lacc = 0, lviews = 0, lmesh = 0, lnodes = 0, lanim = 0, ljson = 0;
+    FILE *meshes = NULL, *nodes = NULL, *anim = NULL, *jf = NULL;
+    long *keep = NULL, nkeep = 0, j;
+    float *fb = NULL;
+    double extent = 0.1, lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+    int b, k, s, q, nmesh = 0, rc = CLI_FAIL, time_acc = -1, nsampler = 0;
+    static const float colour[][3] = {{0.55f, 0.55f, 0.6f}, {0.95f, 0.45f, 0.1f}, {0.7f, 0.75f, 0.7f},
+                                      {0.2f, 0.35f, 0.75f}, {0.8f, 0.65f, 0.2f}, {0.3f, 0.6f, 0.35f},
+                                      {0.6f, 0.3f, 0.6f}, {0.3f, 0.6f, 0.65f}};
+    memset(&ps, 0, sizeof ps);
+    memset(&g, 0, sizeof g);
+    memset(prim, 0, sizeof prim);
+    g.first_acc = g.first_view = 1;
+    if (isatty(fileno(stdout))) {
+        cli_error("'export gltf' writes binary glTF (GLB): redirect it to a file, e.g. > run.glb");
+        return CLI_FAIL;
+    }
+    if (load_poses(c, &ps) < 0) goto out;
+    g.acc = open_memstream(&sacc, &lacc);
+    g.views = open_memstream(&sviews, &lviews);
+    meshes = open_memstream(&smesh, &lmesh);
+    nodes = open_memstream(&snodes, &lnodes);
+    anim = open_memstream(&sanim, &lanim);
+    keep = malloc((size_t)(c->nsel > 0 ? c->nsel : 1) * sizeof *keep);
+    fb = malloc((size_t)(c->nsel > 0 ? c->nsel : 1) * 4 * sizeof *fb);
+    if (!g.acc || !g.views || !meshes || !nodes || !anim || !keep || !fb) { cli_error("out of memory"); goto out; }
+
+    /* keyframes: selected samples with finite poses and float32 times that increase */
+    for (j = 0; j < c->nsel; j++) {
+        long i = c->sel[j];
+        int finite = isfinite(c->t[i]);
+        for (s = 0; s < r->nsys && finite; s++)
+            for (k = 0; k < r->sys[s].nbody * 3 && finite; k++)
+                finite = isfinite(ps.bx[s][(size_t)i * 3 * r->sys[s].nbody + k]);
+        for (s = 0; s < r->nsys && finite; s++)
+            for (k = 0; k < r->sys[s].nbody * 4 && finite; k++)
+                finite = isfinite(ps.bq[s][(size_t)i * 4 * r->sys[s].nbody + k]);
+        if (!finite) break; /* a run that failed numerically: its poses up to there */
+        if (nkeep > 0 && !((float)c->t[i] > (float)c->t[keep[nkeep - 1]])) continue;
+        keep[nkeep++] = i;
+    }
+    if (nkeep == 0) { cli_error("%s has no sample with finite body poses", c->o->path); goto out; }
+
+    /* the plane's drawn size: the spread of the bodies at the first keyframe */
+    pose_frame(r, &ps, keep[0]);
+    for (b = 0; b < r->nbody; b++)
+        for (k = 0; k < 3; k++) {
+            if (ps.X[3 * b + k] < lo[k]) lo[k] = ps.X[3 * b + k];
+            if (ps.X[3 * b + k] > hi[k]) hi[k] = ps.X[3 * b + k];
+        }
+    for (k = 0; k < 3; k++)
+        if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
+
+    /* one mesh per body that has anything to draw */
+    for (b = 0; b < r->nbody; b++) {
+        gl_xf I;
+        int p, nprim = 0, ch;
+        double tip[3] = {0, 0, 0}, best = 0;
+        memset(&I, 0, sizeof I);
+        I.R[0] = I.R[4] = I.R[8] = 1;
+        for (p = 0; p < GL_NPRIM; p++) prim[p].n = 0;
+        for (q = 0; q < r->nshape; q++) {
+            const cd_h5r_shape *sh = r->shape + q;
+            gl_xf X;
+            if (sh->body != b) continue;
+            memcpy(X.R, sh->rot, sizeof X.R);
+            memcpy(X.p, sh->pos, sizeof X.p);
+            switch (sh->type) {
+            case CD_SHAPE_SPHERE: tri_capsule(prim + 3, &X, sh->size[0], 0, GL_LAT, GL_LON); break;
+            case CD_SHAPE_CAPSULE: tri_capsule(prim + 3, &X, sh->size[0], sh->size[1], GL_LAT, GL_LON); break;
+            case CD_SHAPE_CYLINDER: tri_cylinder(prim + 3, &X, sh->size[0], sh->size[1], GL_LON); break;
+            case CD_SHAPE_BOX: tri_box(prim + 3, &X, sh->size); break;
+            case CD_SHAPE_CONVEX:
+                if (sh->vert_num > 0 && sh->vert_adr >= 0 && sh->vert_adr + sh->vert_num <= r->nvert)
+                    tri_convex(prim + 3, &X, r->vert + 3 * sh->vert_adr, sh->vert_num);
+                break;
+            case CD_SHAPE_PLANE: { /* a square of the scene's size, both faces */
+                double e = extent, c0[3] = {-e, -e, 0}, c1[3] = {e, -e, 0}, c2[3] = {e, e, 0}, c3[3] = {-e, e, 0};
+                tri_add(prim + 2, &X, c0, c1, c2); tri_add(prim + 2, &X, c0, c2, c3);
+                tri_add(prim + 2, &X, c0, c2, c1); tri_add(prim + 2, &X, c0, c3, c2);
+                break;
+            }
+            default: break;
+            }
+        }
+        for (q = 0; q < r->ncp; q++) {
+            gl_xf X;
+            if (r->cp[q].body != b) continue;
+            memset(&X, 0, sizeof X);
+            X.R[0] = X.R[4] = X.R[8] = 1;
+            memcpy(X.p, r->cp[q].pos, sizeof X.p);
+            tri_capsule(prim + 1, &X, r->cp[q].radius > 1e-3 ? r->cp[q].radius : 1e-3, 0, 6, 8);
+            if (nrm3(r->cp[q].pos) > best) { best = nrm3(r->cp[q].pos); memcpy(tip, r->cp[q].pos, sizeof tip); }
+        }
+        /* link rods: to each child's joint origin (at the first keyframe, in
+         * this body's frame), and a tip link to its farthest check point */
+        {
+            int nchild = 0;
+            for (ch = b + 1; ch < r->nbody; ch++)
+                if (r->body[ch].parent == b) {
+                    double d[3], loc[3], zero[3] = {0, 0, 0}, L;
+                    cd_v3_sub(d, ps.X + 3 * ch, ps.X + 3 * b);
+                    cd_m3_tmulv(loc, ps.R + 9 * b, d);
+                    L = nrm3(loc);
+                    if (r->body[b].parent >= 0 || prim[3].n == 0) /* a base drawn by its shape needs no spokes */
+                        tri_rod(prim + 0, zero, loc, fmin(0.03, fmax(0.002, 0.04 * L)));
+                    nchild++;
+                }
+            if (nchild == 0 && r->body[b].parent >= 0 && best > 0) {
+                double zero[3] = {0, 0, 0};
+                tri_rod(prim + 0, zero, tip, fmin(0.03, fmax(0.002, 0.04 * best)));
+            }
+        }
+        for (p = 0; p < GL_NPRIM; p++)
+            if (prim[p].oom) { cli_error("out of memory"); goto out; }
+        fprintf(nodes, ",{\"name\":");
+        json_str(nodes, r->body[b].full_name);
+        fprintf(nodes, ",\"extras\":{\"body\":%d,\"system\":%d}", b, r->body[b].system);
+        for (p = 0; p < GL_NPRIM; p++) nprim += prim[p].n > 0;
+        if (nprim > 0) {
+            int first = 1;
+            fprintf(meshes, "%s{\"name\":", nmesh ? "," : "");
+            json_str(meshes, r->body[b].full_name);
+            fputs(",\"primitives\":[", meshes);
+            for (p = 0; p < GL_NPRIM; p++) {
+                size_t t, nv = 3 * prim[p].n;
+                float *pos, *nor;
+                int apos, anor, mat;
+                if (prim[p].n == 0) continue;
+                pos = malloc(nv * 3 * sizeof *pos);
+                nor = malloc(nv * 3 * sizeof *nor);
+                if (!pos || !nor) { free(pos); free(nor); cli_error("out of memory"); goto out; }
+                for (t = 0; t < prim[p].n; t++) {
+                    const double *w = prim[p].v + 9 * t;
+                    double e1[3], e2[3], n[3];
+                    cd_v3_sub(e1, w + 3, w);
+                    cd_v3_sub(e2, w + 6, w);
+                    cd_v3_cross(n, e1, e2);
+                    cd_v3_scale(n, n, 1.0 / nrm3(n));
+                    for (k = 0; k < 9; k++) {
+                        pos[9 * t + k] = (float)w[k];
+                        nor[9 * t + k] = (float)n[k % 3];
+                    }
+                }
+                apos = gl_accessor(&g, pos, nv, 3, 34962);
+                anor = gl_accessor(&g, nor, nv, 3, 34962);
+                free(pos);
+                free(nor);
+                mat = p == 0 ? GL_MAT_LINK : p == 1 ? GL_MAT_CP : p == 2 ? GL_MAT_PLANE : GL_MAT_SYS0 + r->body[b].system % 5;
+                fprintf(meshes, "%s{\"attributes\":{\"POSITION\":%d,\"NORMAL\":%d},\"material\":%d}", first ? "" : ",",
+                        apos, anor, mat);
+                first = 0;
+            }
+            fputs("]}", meshes);
+            fprintf(nodes, ",\"mesh\":%d", nmesh++);
+        }
+        {
+            const double *x = ps.X + 3 * b;
+            const cd_h5r_sys *sy = r->sys + r->body[b].system;
+            const double *qq = ps.bq[r->body[b].system] + 4 * ((size_t)keep[0] * sy->nbody + (b - sy->body_first));
+            double nq = sqrt(qq[0] * qq[0] + qq[1] * qq[1] + qq[2] * qq[2] + qq[3] * qq[3]);
+            fprintf(nodes, ",\"translation\":[%.9g,%.9g,%.9g],\"rotation\":[%.9g,%.9g,%.9g,%.9g]}",
+                    (double)(float)x[0], (double)(float)x[1], (double)(float)x[2], (double)(float)(qq[1] / nq),
+                    (double)(float)(qq[2] / nq), (double)(float)(qq[3] / nq), (double)(float)(qq[0] / nq));
+        }
+    }
+
+    /* the animation: one time accessor, a translation and a rotation sampler per body */
+    for (j = 0; j < nkeep; j++) fb[j] = (float)c->t[keep[j]];
+    time_acc = gl_accessor(&g, fb, (size_t)nkeep, 1, 0);
+    fputs("{\"name\":\"capdyn run\",\"samplers\":[", anim);
+    for (b = 0; b < r->nbody; b++) {
+        const cd_h5r_sys *sy = r->sys + r->body[b].system;
+        int jb = b - sy->body_first, at, ar;
+        for (j = 0; j < nkeep; j++) {
+            const double *x = ps.bx[r->body[b].system] + 3 * ((size_t)keep[j] * sy->nbody + jb);
+            for (k = 0; k < 3; k++) fb[3 * j + k] = (float)x[k];
+        }
+        at = gl_accessor(&g, fb, (size_t)nkeep, 3, 0);
+        for (j = 0; j < nkeep; j++) {
+            const double *qq = ps.bq[r->body[b].system] + 4 * ((size_t)keep[j] * sy->nbody + jb);
+            double nq = sqrt(qq[0] * qq[0] + qq[1] * qq[1] + qq[2] * qq[2] + qq[3] * qq[3]);
+            fb[4 * j + 0] = (float)(qq[1] / nq);
+            fb[4 * j + 1] = (float)(qq[2] / nq);
+            fb[4 * j + 2] = (float)(qq[3] / nq);
+            fb[4 * j + 3] = (float)(qq[0] / nq);
+        }
+        ar = gl_accessor(&g, fb, (size_t)nkeep, 4, 0);
+        fprintf(anim, "%s{\"input\":%d,\"output\":%d,\"interpolation\":\"LINEAR\"},"
+                      "{\"input\":%d,\"output\":%d,\"interpolation\":\"LINEAR\"}",
+                b ? "," : "", time_acc, at, time_acc, ar);
+        nsampler += 2;
+    }
+    fputs("],\"channels\":[", anim);
+    for (b = 0; b < r->nbody; b++)
+        fprintf(anim, "%s{\"sampler\":%d,\"target\":{\"node\":%d,\"path\":\"translation\"}},"
+                      "{\"sampler\":%d,\"target\":{\"node\":%d,\"path\":\"rotation\"}}",
+                b ? "," : "", 2 * b, b + 1, 2 * b + 1, b + 1);
+    fputs("]}", anim);
+    if (g.bin.oom) { cli_error("out of memory"); goto out; }
+    fclose(g.acc); g.acc = NULL;
+    fclose(g.views); g.views = NULL;
+    fclose(meshes); meshes = NULL;
+    fclose(nodes); nodes = NULL;
+    fclose(anim); anim = NULL;
+    while (g.bin.n % 4) gb_bytes(&g.bin, "", 1);
+
+    jf = open_memstream(&json, &ljson);
+    if (!jf) { cli_error("out of memory"); goto out; }
+    fprintf(jf, "{\"asset\":{\"version\":\"2.0\",\"generator\":\"capdyn %s export gltf\"", cd_version());
+    {
+        char *title = cd_h5r_attr_str(r, "/", "title");
+        if (title) {
+            fputs(",\"extras\":{\"title\":", jf);
+            json_str(jf, title);
+            fputc('}', jf);
+            free(title);
+        }
+    }
+    fputs("},\"scene\":0,\"scenes\":[{\"nodes\":[0]}],", jf);
+    /* node 0: capdyn's world (z up) turned into glTF's (y up): -90 deg about x */
+    fputs("\"nodes\":[{\"name\":\"capdyn world (z up)\",\"rotation\":[-0.707106781,0,0,0.707106781]", jf);
+    if (r->nbody > 0) {
+        fputs(",\"children\":[", jf);
+        for (b = 0; b < r->nbody; b++) fprintf(jf, "%s%d", b ? "," : "", b + 1);
+        fputc(']', jf);
+    }
+    fprintf(jf, "}%s]", snodes ? snodes : "");
+    if (nmesh > 0) fprintf(jf, ",\"meshes\":[%s]", smesh);
+    fputs(",\"materials\":[", jf);
+    {
+        static const char *mname[] = {"link", "check point", "plane"};
+        int mi;
+        for (mi = 0; mi < GL_MAT_SYS0 + 5; mi++) {
+            const float *col = colour[mi];
+            fprintf(jf, "%s{\"name\":\"", mi ? "," : "");
+            if (mi < GL_MAT_SYS0) fputs(mname[mi], jf);
+            else fprintf(jf, "system %d", mi - GL_MAT_SYS0);
+            fprintf(jf, "\",\"pbrMetallicRoughness\":{\"baseColorFactor\":[%.3f,%.3f,%.3f,1],\"metallicFactor\":0,"
+                        "\"roughnessFactor\":0.7}}", (double)col[0], (double)col[1], (double)col[2]);
+        }
+    }
+    fputc(']', jf);
+    fprintf(jf, ",\"accessors\":[%s],\"bufferViews\":[%s],\"buffers\":[{\"byteLength\":%lu}]", sacc, sviews,
+            (unsigned long)g.bin.n);
+    if (r->nbody > 0 && nsampler > 0) fprintf(jf, ",\"animations\":[%s]", sanim);
+    fputc('}', jf);
+    fclose(jf);
+    jf = NULL;
+    {
+        gl_buf out;
+        size_t jpad = (4 - ljson % 4) % 4, total = 12 + 8 + ljson + jpad + 8 + g.bin.n;
+        memset(&out, 0, sizeof out);
+        if (total > 0xffffffffUL) { cli_error("the glTF file would exceed 4 GiB: export fewer samples (--frames N)"); goto out; }
+        gb_u32(&out, 0x46546C67UL); /* "glTF" */
+        gb_u32(&out, 2);
+        gb_u32(&out, (unsigned long)total);
+        gb_u32(&out, (unsigned long)(ljson + jpad));
+        gb_u32(&out, 0x4E4F534AUL); /* JSON */
+        gb_bytes(&out, json, ljson);
+        for (k = 0; k < (int)jpad; k++) gb_bytes(&out, " ", 1);
+        gb_u32(&out, (unsigned long)g.bin.n);
+        gb_u32(&out, 0x004E4942UL); /* BIN */
+        gb_bytes(&out, g.bin.p, g.bin.n);
+        if (out.oom) { free(out.p); cli_error("out of memory"); goto out; }
+        if (fwrite(out.p, 1, out.n, stdout) != out.n) { free(out.p); cli_error("writing the output failed"); goto out; }
+        free(out.p);
+    }
+    rc = CLI_OK;
+out:
+    if (g.acc) fclose(g.acc);
+    if (g.views) fclose(g.views);
+    if (meshes) fclose(meshes);
+    if (nodes) fclose(nodes);
+    if (anim) fclose(anim);
+    if (jf) fclose(jf);
+    free(sacc); free(sviews); free(smesh); free(snodes); free(sanim); free(json);
+    for (k = 0; k < GL_NPRIM; k++) free(prim[k].v);
+    free(g.bin.p);
+    free(keep);
+    free(fb);
+    free_poses(r, &ps);
+    return rc;
+}
+
+/* ---- 3-D wireframes and contact forces (for gnuplot splot) -------------------- */
+static void e_pt(exp_ctx *c, const double ctr[3], const double Rw[9], double x, double y, double z, int part, int body)
+{
+    double loc[3], w[3];
+    int p = c->o->prec;
+    loc[0] = x; loc[1] = y; loc[2] = z;
+    cd_m3_mulv(w, Rw, loc);
+    num0(ctr[0] + w[0], p);
+    num(ctr[1] + w[1], p);
+    num(ctr[2] + w[2], p);
+    printf(" %d %d\n", part, body);
+}
+/* a circle of radius r in the local plane z = z0 (axis 2), x = z0 (axis 0) or y = z0 (axis 1) */
+static void e_circle(exp_ctx *c, const double ctr[3], const double Rw[9], double r, double z0, int axis, double a0,
+                     double a1, int body)
+{
+    int i, n = NCIRC;
+    for (i = 0; i <= n; i++) {
+        double a = a0 + (a1 - a0) * i / n, u = r * cos(a), v = r * sin(a);
+        if (axis == 2) e_pt(c, ctr, Rw, u, v, z0, 1, body);
+        else if (axis == 0) e_pt(c, ctr, Rw, z0, u, v, 1, body);
+        else e_pt(c, ctr, Rw, v, z0, u, 1, body);
+    }
+    putchar('\n');
+}
+static void e_line(exp_ctx *c, const double ctr[3], const double Rw[9], const double a[3], const double b[3], int part,
+                   int body)
+{
+    e_pt(c, ctr, Rw, a[0], a[1], a[2], part, body);
+    e_pt(c, ctr, Rw, b[0], b[1], b[2], part, body);
+    putchar('\n');
+}
+
+static void shape_edges(exp_ctx *c, const pose_set *ps, int k, double extent)
+{
+    const cd_h5r *r = c->r;
+    const cd_h5r_shape *sh = r->shape + k;
+    double Rw[9], ctr[3];
+    int i, b = sh->body;
+    cd_m3_mul(Rw, ps->R + 9 * b, sh->rot);
+    to_world(ps, b, sh->pos, ctr);
+    switch (sh->type) {
+    case CD_SHAPE_SPHERE:
+        for (i = 0; i < 3; i++) e_circle(c, ctr, Rw, sh->size[0], 0, i, 0, 2 * CD_PI, b);
+        break;
+    case CD_SHAPE_CYLINDER:
+    case CD_SHAPE_CAPSULE: {
+        double rr = sh->size[0], h = sh->size[1];
+        e_circle(c, ctr, Rw, rr, -h, 2, 0, 2 * CD_PI, b);
+        e_circle(c, ctr, Rw, rr, h, 2, 0, 2 * CD_PI, b);
+        for (i = 0; i < 4; i++) {
+            double a = 0.5 * CD_PI * i, p0[3], p1[3];
+            p0[0] = p1[0] = rr * cos(a); p0[1] = p1[1] = rr * sin(a); p0[2] = -h; p1[2] = h;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        if (sh->type == CD_SHAPE_CAPSULE) { /* the end caps: half circles in the xz and yz planes */
+            int e;
+            for (e = -1; e <= 1; e += 2) {
+                int ax;
+                for (ax = 0; ax < 2; ax++) {
+                    int n;
+                    for (n = 0; n <= NCIRC / 2; n++) {
+                        double a = CD_PI * n / (NCIRC / 2), u = rr * cos(a), v = e * (h + rr * sin(a));
+                        if (ax == 0) e_pt(c, ctr, Rw, u, 0, v, 1, b);
+                        else e_pt(c, ctr, Rw, 0, u, v, 1, b);
+                    }
+                    putchar('\n');
+                }
+            }
+        }
+        break;
+    }
+    case CD_SHAPE_BOX: {
+        const double *hh = sh->size;
+        int e;
+        for (e = 0; e < 12; e++) {
+            int ax = e / 4, iu = (ax + 1) % 3, iv = (ax + 2) % 3;
+            double p0[3], p1[3];
+            p0[ax] = -hh[ax]; p1[ax] = hh[ax];
+            p0[iu] = p1[iu] = (e & 1 ? 1 : -1) * hh[iu];
+            p0[iv] = p1[iv] = (e & 2 ? 1 : -1) * hh[iv];
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        break;
+    }
+    case CD_SHAPE_CONVEX: {
+        gl_tris m;
+        gl_xf I;
+        size_t t;
+        memset(&m, 0, sizeof m);
+        memset(&I, 0, sizeof I);
+        I.R[0] = I.R[4] = I.R[8] = 1;
+        if (sh->vert_num > 0 && sh->vert_adr >= 0 && sh->vert_adr + sh->vert_num <= r->nvert)
+            tri_convex(&m, &I, r->vert + 3 * sh->vert_adr, sh->vert_num);
+        for (t = 0; t < m.n; t++) {
+            const double *v = m.v + 9 * t;
+            for (i = 0; i <= 3; i++) e_pt(c, ctr, Rw, v[3 * (i % 3)], v[3 * (i % 3) + 1], v[3 * (i % 3) + 2], 1, b);
+            putchar('\n');
+        }
+        free(m.v);
+        break;
+    }
+    case CD_SHAPE_PLANE: /* a grid of the scene's size on the boundary plane */
+        for (i = -4; i <= 4; i++) {
+            double p0[3], p1[3], s = extent * i / 4.0;
+            p0[0] = s; p0[1] = -extent; p0[2] = 0; p1[0] = s; p1[1] = extent; p1[2] = 0;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+            p0[0] = -extent; p0[1] = s; p1[0] = extent; p1[1] = s;
+            e_line(c, ctr, Rw, p0, p1, 1, b);
+        }
+        break;
+    default:
+        break;
+    }
+}
+
+static int ex_edges(exp_ctx *c)
+{
+    const cd_h5r *r = c->r;
+    pose_set ps;
+    long j;
+    int b, k;
+    double I9[9] = {1, 0, 0, 0, 1, 0, 0, 0, 1}, O3[3] = {0, 0, 0};
+    memset(&ps, 0, sizeof ps);
+    if (load_poses(c, &ps) < 0) {
+        free_poses(r, &ps);
+        return CLI_FAIL;
+    }
+    puts("# x y z part body");
+    printf("# 3-D polylines in the %s frame [m]; part 0 link, 1 shape, 2 base-to-joint segment; one block per "
+           "frame (gnuplot index), polylines separated by a blank line\n",
+           c->o->frame_body >= 0 ? r->body[c->o->frame_body].full_name : "world");
+    for (j = 0; j < c->nsel; j++) {
+        long i = c->sel[j];
+        double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, extent = 0;
+        pose_frame(r, &ps, i);
+        for (b = 0; b < r->nbody; b++)
+            for (k = 0; k < 3; k++) {
+                if (ps.X[3 * b + k] < lo[k]) lo[k] = ps.X[3 * b + k];
+                if (ps.X[3 * b + k] > hi[k]) hi[k] = ps.X[3 * b + k];
+            }
+        for (k = 0; k < 3; k++)
+            if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
+        if (extent < 0.1) extent = 0.1;
+        if (j > 0) fputs("\n\n", stdout);
+        printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
+        for (b = 0; b < r->nbody; b++) {
+            int ch, nchild = 0, q, has_shape = 0;
+            double tip[3] = {0, 0, 0}, best = 0, w[3];
+            for (q = 0; q < r->nshape; q++)
+                if (r->shape[q].body == b) has_shape = 1;
+            for (ch = b + 1; ch < r->nbody; ch++)
+                if (r->body[ch].parent == b) {
+                    if (r->body[b].parent >= 0 || !has_shape)
+                        e_line(c, O3, I9, ps.X + 3 * b, ps.X + 3 * ch, r->body[b].parent < 0 ? 2 : 0, b);
+                    nchild++;
+                }
+            if (nchild > 0 || r->body[b].parent < 0) continue;
+            for (q = 0; q < r->ncp; q++)
+                if (r->cp[q].body == b && nrm3(r->cp[q].pos) > best) {
+                    best = nrm3(r->cp[q].pos);
+                    memcpy(tip, r->cp[q].pos, sizeof tip);
+                }
+            if (best == 0) cd_v3_scale(tip, r->body[b].com, 2.0);
+            if (nrm3(tip) > 0) {
+                to_world(&ps, b, tip, w);
+                e_line(c, O3, I9, ps.X + 3 * b, w, 0, b);
+            }
+        }
+        for (k = 0; k < r->nshape; k++) shape_edges(c, &ps, k, extent);
+    }
+    free_poses(r, &ps);
+    return CLI_OK;
+}
+
+/* the system of a body */
+static int sys_of(const cd_h5r *r, int b) { return b >= 0 && b < r->nbody ? r->body[b].system : -1; }
+
+static int ex_forces(exp_ctx *c)
+{
+    const cd_h5r *r = c->r;
+    pose_set ps;
+    double *fn = NULL, *ft = NULL, *pt = NULL, *nr = NULL, *mode = NULL;
+    long j;
+    int k, a, p = c->o->prec, rc = CLI_OK;
+    memset(&ps, 0, sizeof ps);
+    if (load_poses(c, &ps) < 0 ||
+        (r->nslot > 0 && (!(fn = series(c, "/contacts/fn")) || !(ft = series(c, "/contacts/ft")) ||
+                          !(pt = series(c, "/contacts/point")) || !(nr = series(c, "/contacts/normal")) ||
+                          !(mode = series(c, "/contacts/mode"))))) {
+        rc = CLI_FAIL;
+        goto out;
+    }
+    puts("# x y z fx fy fz fn ft mode slot between body_a body_b t");
+    printf("# contacts in contact (mode > 0) per frame, in the %s frame: contact point [m] and the force on the "
+           "shape's body (body_b), -(fn normal + ft) [N]; between 1: body_a and body_b in different systems "
+           "(e.g. finger on target), 0: the same system (e.g. finger on finger); body names system/body\n",
+           c->o->frame_body >= 0 ? r->body[c->o->frame_body].full_name : "world");
+    for (j = 0; j < c->nsel; j++) {
+        long i = c->sel[j];
+        int nout = 0;
+        pose_frame(r, &ps, i);
+        if (j > 0) fputs("\n\n", stdout);
+        printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
+        for (k = 0; k < r->nslot; k++) {
+            size_t o = (size_t)i * r->nslot + k;
+            double f[3], x[3], fl[3];
+            int m = (int)mode[o];
+            if (m <= 0) continue;
+            for (a = 0; a < 3; a++) f[a] = -(fn[o] * nr[3 * o + a] + ft[3 * o + a]);
+            frame_point(&ps, pt + 3 * o, x);
+            frame_vec(&ps, f, fl);
+            num0(x[0], p); num(x[1], p); num(x[2], p);
+            num(fl[0], p); num(fl[1], p); num(fl[2], p);
+            num(fn[o], p);
+            num(nrm3(ft + 3 * o), p);
+            printf(" %d %d %d ", m, k, sys_of(r, r->slot[k].body_a) != sys_of(r, r->slot[k].body_b));
+            token(r->slot[k].body_a_name);
+            putchar(' ');
+            token(r->slot[k].body_b_name);
+            num(c->t[i], p);
+            putchar('\n');
+            nout++;
+        }
+        if (nout == 0) { /* gnuplot needs a row per block */
+            fputs("nan nan nan nan nan nan 0 0 0 -1 0 - -", stdout);
+            num(c->t[i], p);
+            putchar('\n');
+        }
+    }
+out:
+    free(fn); free(ft); free(pt); free(nr); free(mode);
+    free_poses(r, &ps);
+    return rc;
+}
+
 int cmd_export(int argc, char **argv)
 {
     exp_opts o;
@@ -795,7 +1642,7 @@ int cmd_export(int argc, char **argv)
             }
             if (!strcmp(a, "--active")) { o.active = 1; continue; }
             if (!strcmp(a, "--every") || !strcmp(a, "--frames") || !strcmp(a, "--at") || !strcmp(a, "--view") ||
-                !strcmp(a, "--precision")) {
+                !strcmp(a, "--precision") || !strcmp(a, "--frame")) {
                 if (i + 1 >= argc) return cli_usage("export", "%s needs a value", a);
                 val = argv[++i];
             } else {
@@ -807,6 +1654,8 @@ int cmd_export(int argc, char **argv)
                 if (cli_count(val, &o.frames) || o.frames < 1) return cli_usage("export", "--frames expects a positive integer, got '%s'", val);
             } else if (!strcmp(a, "--at")) {
                 o.at = val;
+            } else if (!strcmp(a, "--frame")) {
+                o.frame = val;
             } else if (!strcmp(a, "--view")) {
                 if (!strcmp(val, "xy")) { o.view_u = 0; o.view_v = 1; }
                 else if (!strcmp(val, "xz")) { o.view_u = 0; o.view_v = 2; }
@@ -823,16 +1672,17 @@ int cmd_export(int argc, char **argv)
         pos[npos++] = a;
     }
     if (npos < 1) return cli_usage("export", "missing the results file");
-    if (npos < 2) return cli_usage("export", "missing WHAT (time, system NAME, contacts, slot N, slots, events, diagnostics, outline, checkpoints)");
+    if (npos < 2) return cli_usage("export", "missing WHAT (time, system NAME, contacts, slot N, slots, events, diagnostics, outline, checkpoints, edges, forces, gltf)");
     o.path = pos[0];
     o.what = pos[1];
     o.arg = npos > 2 ? pos[2] : NULL;
     if (!strcmp(o.what, "system") || !strcmp(o.what, "slot")) needs_arg = 1;
     else if (!strcmp(o.what, "diagnostics")) opt_arg = 1;
     else if (strcmp(o.what, "time") && strcmp(o.what, "contacts") && strcmp(o.what, "slots") && strcmp(o.what, "events") &&
-             strcmp(o.what, "outline") && strcmp(o.what, "checkpoints"))
+             strcmp(o.what, "outline") && strcmp(o.what, "checkpoints") && strcmp(o.what, "gltf") &&
+             strcmp(o.what, "edges") && strcmp(o.what, "forces"))
         return cli_usage("export", "unknown WHAT '%s' (time, system NAME, contacts, slot N, slots, events, diagnostics, "
-                                   "outline, checkpoints)", o.what);
+                                   "outline, checkpoints, edges, forces, gltf)", o.what);
     if (needs_arg && !o.arg) return cli_usage("export", "'%s' needs an argument (%s)", o.what, !strcmp(o.what, "system") ? "the system name" : "the slot number");
     if (!needs_arg && !opt_arg && o.arg) return cli_usage("export", "'%s' takes no argument, got '%s'", o.what, o.arg);
     if ((o.every > 0) + (o.frames > 0) + (o.at != NULL) > 1) return cli_usage("export", "use only one of --every, --frames, --at");
@@ -851,7 +1701,26 @@ int cmd_export(int argc, char **argv)
         cd_h5r_close(r);
         return CLI_FAIL;
     }
-    geometry = !strcmp(o.what, "outline") || !strcmp(o.what, "checkpoints");
+    geometry = !strcmp(o.what, "outline") || !strcmp(o.what, "checkpoints") || !strcmp(o.what, "edges") ||
+               !strcmp(o.what, "forces");
+    o.frame_body = -1;
+    if (o.frame) {
+        int b;
+        if (!geometry) {
+            cd_h5r_close(r);
+            free(c.t);
+            return cli_usage("export", "--frame applies to outline, checkpoints, edges and forces, not to '%s'", o.what);
+        }
+        for (b = 0; b < r->nbody && o.frame_body < 0; b++)
+            if (!strcmp(r->body[b].full_name, o.frame)) o.frame_body = b;
+        if (o.frame_body < 0) {
+            cli_error("--frame: no body '%s' in %s (bodies are named system/body, a base by its system's name)", o.frame,
+                      o.path);
+            cd_h5r_close(r);
+            free(c.t);
+            return CLI_FAIL;
+        }
+    }
     rc = select_samples(&c, geometry);
     if (rc == -2) {
         free(c.t);
@@ -869,6 +1738,9 @@ int cmd_export(int argc, char **argv)
     else if (!strcmp(o.what, "slots")) rc = ex_slots(&c);
     else if (!strcmp(o.what, "events")) rc = ex_events(&c);
     else if (!strcmp(o.what, "diagnostics")) rc = ex_diagnostics(&c);
+    else if (!strcmp(o.what, "edges")) rc = r->n > 0 ? ex_edges(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
+    else if (!strcmp(o.what, "forces")) rc = r->n > 0 ? ex_forces(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
+    else if (!strcmp(o.what, "gltf")) rc = r->n > 0 ? ex_gltf(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     else if (!strcmp(o.what, "outline")) rc = r->n > 0 ? ex_outline(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     else rc = r->n > 0 ? ex_checkpoints(&c) : (cli_error("%s has no committed samples", o.path), CLI_FAIL);
     free(c.t);
