@@ -1380,3 +1380,30 @@ Test(cli, no_relative_energy_figure_against_a_kinetic_energy_near_zero)
     free(err);
     rm_rf(dir);
 }
+
+Test(cli, export_to_a_full_device_fails_with_one_line)
+{
+    /* every export writes through the reading child's temporary file; the
+     * parent's copy to stdout must report a device that takes nothing
+     * (/dev/full: ENOSPC). The contacts table fitted stdio's buffer and
+     * exited 0 with nothing written. */
+    static const char *what[] = {"events", "contacts", "system carrier"};
+    char dir[64], sc[512], cmd[2048], *err;
+    int i, rc;
+    if (access("/dev/full", W_OK) != 0) cr_skip_test("no /dev/full here");
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(cmd, sizeof cmd, "%s run %s -o %s/r.h5 -q --set simulation.duration=0.05", bin(), sc, dir);
+    cr_assert_eq(system(cmd), 0, "%s", cmd);
+    for (i = 0; i < 3; i++) {
+        snprintf(cmd, sizeof cmd, "%s export %s/r.h5 %s > /dev/full 2> %s/err.txt", bin(), dir, what[i], dir);
+        rc = system(cmd);
+        cr_expect(WIFEXITED(rc) && WEXITSTATUS(rc) == 1, "export %s to /dev/full: status %d", what[i], rc);
+        snprintf(cmd, sizeof cmd, "%s/err.txt", dir);
+        err = slurp(cmd);
+        cr_expect(err && strstr(err, "capdyn: error: writing the output failed: No space left on device") != NULL,
+                  "export %s: stderr '%s'", what[i], err ? err : "");
+        free(err);
+    }
+    rm_rf(dir);
+}

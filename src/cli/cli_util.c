@@ -190,12 +190,18 @@ int cli_isolated(const char *path, int (*fn)(void *), void *arg)
         return CLI_FAIL;
     }
     rewind(tmp);
-    while ((n = fread(buf, 1, sizeof buf, tmp)) > 0)
-        if (fwrite(buf, 1, n, stdout) != n) break;
-    fclose(tmp);
-    if (fflush(stdout) != 0) {
-        cli_error("writing the output failed");
-        return CLI_FAIL;
+    {
+        int bad = 0, e = 0;
+        while ((n = fread(buf, 1, sizeof buf, tmp)) > 0)
+            if (fwrite(buf, 1, n, stdout) != n) { bad = 1; e = errno; break; }
+        fclose(tmp);
+        /* a failed write may have been dropped from the buffer already:
+         * fflush alone can then return 0, so the stream's error flag counts */
+        if (fflush(stdout) != 0 && !bad) { bad = 1; e = errno; }
+        if (bad || ferror(stdout)) {
+            cli_error("writing the output failed: %s", strerror(e ? e : EIO));
+            return CLI_FAIL;
+        }
     }
     return WEXITSTATUS(st);
 }
