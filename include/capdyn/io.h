@@ -99,6 +99,9 @@ int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *o, cd_error
 /* The body of joint `joint` in system sys built from u: its id, -2 for a
  * fixed joint (merged), -1 if u has no such joint. */
 int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, const char *joint);
+/* The same before a build: the body's index in the system (1.., the base
+ * is 0), -2 for a fixed joint, -1 if none. */
+int cd_urdf_joint_index(const cd_urdf *u, const char *joint);
 /* Joints of the file (moving and fixed). */
 int cd_urdf_njoint(const cd_urdf *u);
 /* Warnings of the import, one per line ("" if none): a non-convex mesh

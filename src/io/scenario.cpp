@@ -2130,6 +2130,9 @@ struct Builder {
             jname.push_back(str_of(nn, j.kp("name")));
             for (size_t k = 0; k < i; k++)
                 if (jname[k] == jname[i]) fail_at(nn.loc, j.kp("name"), "expected each joint once, got '" + jname[i] + "' twice");
+            int ji = cd_urdf_joint_index(u.get(), jname[i].c_str());
+            if (ji == -2) fail_at(nn.loc, j.kp("name"), "expected a moving joint, got '" + jname[i] + "' (a fixed joint: its link is merged into its parent)");
+            if (ji < 0) fail_at(nn.loc, j.kp("name"), "expected the name of a joint of '" + fp.string() + "', got '" + jname[i] + "'");
             for (const char *k : {"q0_deg", "q0"})
                 if (Entry *qe = j.get(k)) {
                     q0n.push_back(jname[i].c_str());
@@ -2151,12 +2154,7 @@ struct Builder {
         /* the overrides, by joint name */
         for (size_t i = 0; i < jt.size(); i++) {
             Tab j(jt[i], jpath[i], {"name", "q0_deg", "q0", "limit_deg", "limit", "stop", "spring", "damping", "friction", "actuator", "prescribed"});
-            int id = cd_urdf_joint_body(u.get(), m.get(), s.id, jname[i].c_str());
-            const Node &nn = *j.get("name")->val;
-            if (id == -2) fail_at(nn.loc, j.kp("name"), "expected a moving joint, got '" + jname[i] + "' (a fixed joint: its link is merged into its parent)");
-            if (id < 0) {
-                fail_at(nn.loc, j.kp("name"), "expected the name of a joint of '" + fp.string() + "', got '" + jname[i] + "'");
-            }
+            int id = cd_urdf_joint_body(u.get(), m.get(), s.id, jname[i].c_str());  /* checked above: a moving joint */
             bool rev = m->body_jnt_type[id] == CD_JOINT_REVOLUTE;
             const char *wq = rev ? "q0" : "q0_deg", *wl = rev ? "limit" : "limit_deg";
             for (const char *k : {wq, wl})

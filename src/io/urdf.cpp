@@ -663,13 +663,19 @@ extern "C" const char *cd_urdf_robot_name(const cd_urdf *u) { return u ? u->robo
 
 extern "C" int cd_urdf_njoint(const cd_urdf *u) { return u ? (int)u->joint_body.size() : 0; }
 
+extern "C" int cd_urdf_joint_index(const cd_urdf *u, const char *joint)
+{
+    if (!u || !joint) return -1;
+    auto it = u->joint_body.find(joint);
+    if (it == u->joint_body.end()) return -1;
+    return it->second < 0 ? -2 : it->second;
+}
+
 extern "C" int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, const char *joint)
 {
     if (!u || !m || !joint || sys < 0 || sys >= m->nsys) return -1;
-    auto it = u->joint_body.find(joint);
-    if (it == u->joint_body.end()) return -1;
-    if (it->second < 0) return -2;
-    return m->sys_body_adr[sys] + it->second;
+    int k = cd_urdf_joint_index(u, joint);
+    return k < 0 ? k : m->sys_body_adr[sys] + k;
 }
 
 extern "C" int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *o, cd_error *err)
