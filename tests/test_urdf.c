@@ -288,3 +288,24 @@ Test(urdf, c_api_reads_builds_and_refuses)
     cr_expect_eq(err.status, CD_EIO);
     cr_expect_str_eq(err.msg, "/nonexistent/x.urdf: cannot read the URDF file: No such file or directory");
 }
+
+/* urdfdom's own error (it logs through console_bridge) comes back as the one
+ * line of the CLI, with the line of the value it quotes: nothing else on stderr */
+Test(urdf, urdfdom_errors_are_captured_into_one_line)
+{
+    char dir[512], *out = NULL, *errs = NULL;
+    const char *args[] = {"check", "s.toml", NULL};
+    int rc;
+    lu_tmpdir(dir, sizeof dir);
+    lu_write(dir, "s.toml", "[simulation]\nduration = 0.1\n\n[[system]]\nname = \"r\"\nurdf = \"%s\"\n",
+             urdf_path("bad/mass_not_a_number.urdf"));
+    rc = lu_capdyn(dir, &out, &errs, args);
+    cr_expect_eq(rc, 1);
+    cr_expect_str_eq(out, "");
+    cr_expect(errs && strstr(errs, "mass_not_a_number.urdf:14: URDF parse error (urdfdom): Inertial: mass [abc] is not a float\n") &&
+                  strchr(errs, '\n') == errs + strlen(errs) - 1,
+              "%s", errs ? errs : "(null)");
+    free(out);
+    free(errs);
+    lu_rm_rf(dir);
+}

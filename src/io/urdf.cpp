@@ -216,11 +216,15 @@ void merge_mass(UBody &b, double m2, const double c2[3], const double I2[9])
 /* STL (ascii or binary) or OBJ vertices, scaled; fails with a message naming the file */
 std::vector<double> read_mesh(const std::string &file, const std::string &what, const double scale[3])
 {
-    std::ifstream in(file, std::ios::binary);
-    if (!in) fail(what + ": cannot read mesh file '" + file + "': " + std::strerror(errno), CD_EIO);
-    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::string ext = std::filesystem::path(file).extension().string();
     for (char &ch : ext) ch = (char)std::tolower((unsigned char)ch);
+    if (ext != ".obj" && ext != ".stl")
+        fail(what + ": mesh '" + file + "': expected an .stl (ascii or binary) or .obj file (other formats: convert the mesh)");
+    std::ifstream in(file, std::ios::binary);
+    if (!in) fail(what + ": cannot read mesh file '" + file + "': " + std::strerror(errno), CD_EIO);
+    std::error_code ec;
+    if (!std::filesystem::is_regular_file(file, ec)) fail(what + ": mesh file '" + file + "' is not a regular file", CD_EIO);
+    std::string data((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::vector<double> v;
     if (ext == ".obj") {
         std::istringstream s(data);
@@ -341,6 +345,10 @@ cd_urdf *read_urdf(const char *path)
     if (!path) fail("URDF path is NULL");
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(std::string(path) + ": cannot read the URDF file: " + std::strerror(errno), CD_EIO);
+    {
+        std::error_code ec;
+        if (!std::filesystem::is_regular_file(path, ec)) fail(std::string(path) + ": the URDF path is not a regular file", CD_EIO);
+    }
     std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
     std::string P = path;
     std::unique_ptr<cd_urdf> u(new cd_urdf);
@@ -442,6 +450,9 @@ cd_urdf *read_urdf(const char *path)
             if (cap.first.empty()) cap.first = e.what();
         }
         console_bridge::restorePreviousOutputHandler();
+        /* an error urdfdom logged but recovered from (a value it could not
+         * read, the element then dropped) is an error here too */
+        if (!cap.first.empty()) model.reset();
         if (!model) {
             /* urdfdom names the element as "[name]": give its line */
             std::string where = P;
@@ -449,6 +460,16 @@ cd_urdf *read_urdf(const char *path)
                 if (cap.first.find("[" + j.first + "]") != std::string::npos) where = P + ":" + std::to_string(j.second) + ": <joint name=\"" + j.first + "\">";
             for (auto &l : link_line)
                 if (where == P && cap.first.find("[" + l.first + "]") != std::string::npos) where = P + ":" + std::to_string(l.second) + ": <link name=\"" + l.first + "\">";
+            if (where == P) {
+                /* else the line of the first attribute value it quotes, "[value]" */
+                size_t a = cap.first.find('['), b = a == std::string::npos ? a : cap.first.find(']', a);
+                if (b != std::string::npos && b > a + 1) {
+                    std::string v = cap.first.substr(a + 1, b - a - 1);
+                    size_t at = t.find("\"" + v + "\"");
+                    if (at == std::string::npos) at = t.find("'" + v + "'");
+                    if (at != std::string::npos) where = P + ":" + std::to_string(line_at(t, at));
+                }
+            }
             fail(where + ": URDF parse error (urdfdom): " + (cap.first.empty() ? "no message" : cap.first));
         }
     }

@@ -157,6 +157,7 @@ def bad():
         "unknown_parent": ok_link("base") + ok_link("l1") + joint("j1", "continuous", "basse", "l1", axis=(0, 0, 1)),
         "cycle": ok_link("base") + ok_link("a") + ok_link("b") + joint("j0", "continuous", "base", "a", axis=(0, 0, 1)) +
         joint("j1", "continuous", "a", "b", axis=(0, 0, 1)) + joint("j2", "continuous", "b", "a", axis=(0, 0, 1)),
+        "mass_not_a_number": ok_link("base") + link("l1", inertial("abc")) + joint("j1", "continuous", "base", "l1", axis=(0, 0, 1)),
         "missing_mesh": link("base", inertial(1.0), col('<mesh filename="no_such_mesh.stl"/>')),
         "nonconvex_mesh": link("base", inertial(1.0), col('<mesh filename="star.obj"/>')),
         "floating": ok_link("base") + ok_link("l1") + joint("j1", "floating", "base", "l1"),
