@@ -280,7 +280,23 @@ Test(urdf, c_api_reads_builds_and_refuses)
     cr_expect_eq(cd_urdf_joint_body(u, m, sys, "flange_mount"), -2);
     cr_expect_eq(cd_urdf_joint_body(u, m, sys, "nope"), -1);
     cr_expect_eq(cd_model_finalize(m, &err), CD_OK, "%s", err.msg);
+    /* NULL arguments, the documented way (docs/embedding.md, "NULL arguments") */
     cr_expect_eq(cd_urdf_build(NULL, m, &o, &err), -1);
+    cr_expect(err.status == CD_EINVAL && strstr(err.msg, "cd_urdf_build: the URDF is NULL"), "%s", err.msg);
+    cr_expect_eq(cd_urdf_build(u, NULL, &o, NULL), -1);
+    cr_expect_eq(cd_urdf_build(u, m, NULL, NULL), -1);
+    cr_expect_null(cd_urdf_read(NULL, &err));
+    cr_expect(err.status == CD_EINVAL && strstr(err.msg, "cd_urdf_read: the path is NULL"), "%s", err.msg);
+    cr_expect_null(cd_urdf_warnings(NULL));
+    cr_expect_null(cd_urdf_robot_name(NULL));
+    cr_expect_null(cd_urdf_describe(NULL, m, 0));
+    cr_expect_null(cd_urdf_describe(u, NULL, 0));
+    cr_expect_eq(cd_urdf_njoint(NULL), 0);
+    cr_expect_eq(cd_urdf_joint_index(NULL, "j1"), -1);
+    cr_expect_eq(cd_urdf_joint_index(u, NULL), -1);
+    cr_expect_eq(cd_urdf_joint_index(u, "j7"), 7);
+    cr_expect_eq(cd_urdf_joint_body(NULL, m, 0, "j1"), -1);
+    cr_expect_eq(cd_urdf_joint_body(u, NULL, 0, "j1"), -1);
     cd_model_free(m);
     cd_urdf_free(u);
     cd_urdf_free(NULL);

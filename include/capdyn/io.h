@@ -94,7 +94,8 @@ cd_urdf *cd_urdf_read(const char *path, cd_error *err);
 /* Adds the URDF's system to m (before cd_model_finalize). Body 0 of the
  * system is the root link (its frame moved to its CoM), then one body per
  * moving joint, named after its child link, depth first in file order.
- * Returns the system id, or -1 with err filled. */
+ * Returns the system id, or -1 with err filled (a NULL u, m or o:
+ * CD_EINVAL naming cd_urdf_build). */
 int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *o, cd_error *err);
 /* The body of joint `joint` in system sys built from u: its id, -2 for a
  * fixed joint (merged), -1 if u has no such joint. */
@@ -102,12 +103,12 @@ int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, const char 
 /* The same before a build: the body's index in the system (1.., the base
  * is 0), -2 for a fixed joint, -1 if none. */
 int cd_urdf_joint_index(const cd_urdf *u, const char *joint);
-/* Joints of the file (moving and fixed). */
+/* Joints of the file (moving and fixed); 0 if u is NULL. */
 int cd_urdf_njoint(const cd_urdf *u);
 /* Warnings of the import, one per line ("" if none): a non-convex mesh
- * replaced by its hull. Owned by u. */
+ * replaced by its hull. Owned by u; NULL if u is NULL. */
 const char *cd_urdf_warnings(const cd_urdf *u);
-/* The <robot name>. Owned by u. */
+/* The <robot name>. Owned by u; NULL if u is NULL. */
 const char *cd_urdf_robot_name(const cd_urdf *u);
 /* The imported tree of system sys (bodies, joints, types, masses, limits),
  * one line each; malloc'd (free it), NULL on bad arguments. */

@@ -342,7 +342,7 @@ std::string fmt(double v)
 
 cd_urdf *read_urdf(const char *path)
 {
-    if (!path) fail("URDF path is NULL");
+    if (!path) fail("cd_urdf_read: the path is NULL");
     std::ifstream in(path, std::ios::binary);
     if (!in) fail(std::string(path) + ": cannot read the URDF file: " + std::strerror(errno), CD_EIO);
     {
@@ -679,8 +679,8 @@ extern "C" cd_urdf *cd_urdf_read(const char *path, cd_error *err)
 
 extern "C" void cd_urdf_free(cd_urdf *u) { delete u; }
 
-extern "C" const char *cd_urdf_warnings(const cd_urdf *u) { return u ? u->warnings.c_str() : ""; }
-extern "C" const char *cd_urdf_robot_name(const cd_urdf *u) { return u ? u->robot.c_str() : ""; }
+extern "C" const char *cd_urdf_warnings(const cd_urdf *u) { return u ? u->warnings.c_str() : nullptr; }
+extern "C" const char *cd_urdf_robot_name(const cd_urdf *u) { return u ? u->robot.c_str() : nullptr; }
 
 extern "C" int cd_urdf_njoint(const cd_urdf *u) { return u ? (int)u->joint_body.size() : 0; }
 
@@ -702,11 +702,11 @@ extern "C" int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, 
 extern "C" int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *o, cd_error *err)
 {
     if (!u || !m || !o) {
-        cd_error_set(err, CD_EINVAL, "URDF build: NULL argument");
+        cd_error_set(err, CD_EINVAL, "cd_urdf_build: the %s is NULL", !u ? "URDF" : !m ? "model" : "options");
         return -1;
     }
     if (o->nq0 < 0 || (o->nq0 > 0 && (!o->q0_joint || !o->q0))) {
-        cd_error_set(err, CD_EINVAL, "URDF build: bad q0 arrays");
+        cd_error_set(err, CD_EINVAL, "cd_urdf_build: q0_joint or q0 is NULL with nq0 = %d", o->nq0);
         return -1;
     }
     if (!(o->checkpoint_spacing >= 0) || !(o->checkpoint_radius >= 0)) {
