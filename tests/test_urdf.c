@@ -325,3 +325,20 @@ Test(urdf, urdfdom_errors_are_captured_into_one_line)
     free(errs);
     lu_rm_rf(dir);
 }
+
+/* scenarios/capture_urdf_arm.toml runs its capture to the verdict of the
+ * TOML chaser's run (capture_handrail_tumbling.toml: captured at 4.17 s) */
+Test(urdf, capture_with_the_urdf_chaser_is_captured, .timeout = 300)
+{
+    char dir[512], scen[1024], *out = NULL, *errs = NULL;
+    const char *args[] = {"run", scen, "-o", "out.h5", NULL};
+    int rc;
+    snprintf(scen, sizeof scen, "%s/scenarios/capture_urdf_arm.toml", lu_root());
+    lu_tmpdir(dir, sizeof dir);
+    rc = lu_capdyn(dir, &out, &errs, args);
+    cr_expect_eq(rc, 0, "%s", errs ? errs : "");
+    cr_expect(out && strstr(out, "capture     captured at t = 4.17 s"), "%s", out ? out : "(null)");
+    free(out);
+    free(errs);
+    lu_rm_rf(dir);
+}
