@@ -295,6 +295,14 @@ Test(urdf, c_api_reads_builds_and_refuses)
     cr_expect_eq(cd_urdf_joint_index(NULL, "j1"), -1);
     cr_expect_eq(cd_urdf_joint_index(u, NULL), -1);
     cr_expect_eq(cd_urdf_joint_index(u, "j7"), 7);
+    /* shapes: one <collision> per link, named after it; the flange's on link7 */
+    cr_expect_eq(cd_urdf_nshape(u), 9);
+    cr_expect_str_eq(cd_urdf_shape_name(u, 0), "base");
+    cr_expect_str_eq(cd_urdf_shape_name(u, 7), "link7");
+    cr_expect_str_eq(cd_urdf_shape_name(u, 8), "flange");
+    cr_expect_null(cd_urdf_shape_name(u, 9));
+    cr_expect_null(cd_urdf_shape_name(NULL, 0));
+    cr_expect_eq(cd_urdf_nshape(NULL), 0);
     cr_expect_eq(cd_urdf_joint_body(NULL, m, 0, "j1"), -1);
     cr_expect_eq(cd_urdf_joint_body(u, NULL, 0, "j1"), -1);
     cd_model_free(m);
@@ -341,4 +349,24 @@ Test(urdf, capture_with_the_urdf_chaser_is_captured, .timeout = 300)
     free(out);
     free(errs);
     lu_rm_rf(dir);
+}
+
+/* a [[pair]] names an imported shape "system/LINK" */
+Test(urdf, pairs_name_imported_shapes_by_link)
+{
+    cd_error err;
+    cd_scenario *sc = load_system("arm7.urdf",
+                                  "\n[[system]]\nname = \"ball\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n"
+                                  "position = [2.0, 0.0, 0.0]\ncheckpoints = [[0.0, 0.0, 0.0, 0.05]]\n"
+                                  "\n[[pair]]\ncheckpoints = \"ball\"\nshape = \"robot/link3\"\n"
+                                  "\n[[pair]]\ncheckpoints = \"ball\"\nshape = \"robot/flange\"\n",
+                                  &err);
+    const cd_model *m;
+    cr_assert_not_null(sc, "%s", err.msg);
+    m = sc->model;
+    cr_assert_eq(m->nslot, 2);
+    cr_expect_eq(m->shape_body[m->slot_shape[0]], cd_model_body_id(m, "robot/link3"));
+    cr_expect_eq(m->shape_body[m->slot_shape[1]], cd_model_body_id(m, "robot/link7"), "the flange is merged into link7");
+    cr_expect_eq(m->shape_type[m->slot_shape[1]], CD_SHAPE_SPHERE);
+    cd_scenario_free(sc);
 }

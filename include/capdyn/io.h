@@ -105,6 +105,11 @@ int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, const char 
 int cd_urdf_joint_index(const cd_urdf *u, const char *joint);
 /* Joints of the file (moving and fixed); 0 if u is NULL. */
 int cd_urdf_njoint(const cd_urdf *u);
+/* Shapes cd_urdf_build adds (one per <collision>), and the name of the k-th
+ * in the order added: the <collision name>, else the link's name (LINK_N,
+ * N = 1.., for a link with several); NULL if k is out of range. */
+int cd_urdf_nshape(const cd_urdf *u);
+const char *cd_urdf_shape_name(const cd_urdf *u, int k);
 /* Warnings of the import, one per line ("" if none): a non-convex mesh
  * replaced by its hull. Owned by u; NULL if u is NULL. */
 const char *cd_urdf_warnings(const cd_urdf *u);

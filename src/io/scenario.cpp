@@ -2148,6 +2148,10 @@ struct Builder {
             int id = m->sys_body_adr[s.id] + b;
             s.add_body(b == 0 ? "base" : m->body_name[id], id);
         }
+        for (int k = 0, sh0 = m->nshape - cd_urdf_nshape(u.get()); k < cd_urdf_nshape(u.get()); k++) {
+            s.shape_at.emplace(cd_urdf_shape_name(u.get(), k), s.shapes.size());
+            s.shapes.push_back({cd_urdf_shape_name(u.get(), k), sh0 + k});
+        }
         if (Entry *e = t.get("prescribed_motion"))
             if (bool_of(*e->val, t.kp("prescribed_motion")) && cd_model_prescribe_base(m.get(), s.id, o.vel, o.angvel, &err) != CD_OK)
                 builder_fail(e->val->loc, t.kp("prescribed_motion"));

@@ -50,6 +50,7 @@ struct UrdfError {
 
 struct UShape {
     int type;
+    std::string name;  /* the <collision name>, else LINK or LINK_N (N from 1 when a link has several) */
     std::string what;  /* "link 'x' <collision> 2 (line N)" */
     double pos[3], rot[9], size[3], radius, length;
     std::vector<double> verts;
@@ -82,6 +83,7 @@ struct cd_urdf {
     std::vector<UBody> bodies;
     std::map<std::string, int> joint_body;  /* joint name -> body index, -1 for a fixed joint */
     std::map<std::string, int> joint_line;
+    std::vector<std::string> shape_names; /* in build order */
 };
 
 namespace {
@@ -573,6 +575,7 @@ cd_urdf *read_urdf(const char *path)
             ci++;
             UShape s;
             s.what = lline(L.name) + ": <collision> " + std::to_string(ci);
+            s.name = !col->name.empty() ? col->name : L.collision_array.size() > 1 ? L.name + "_" + std::to_string(ci) : L.name;
             double cp[3], cr[9], tmp[3];
             pose_of(col->origin, cp, cr);
             cd_m3_mul(s.rot, R0, cr);
@@ -639,6 +642,15 @@ cd_urdf *read_urdf(const char *path)
             stack.push_back(c);
         }
     }
+    /* shape names in build order, unique */
+    {
+        std::set<std::string> seen;
+        for (const UBody &b : u->bodies)
+            for (const UShape &sh : b.shapes) {
+                if (!seen.insert(sh.name).second) fail(sh.what + ": a second collision named '" + sh.name + "' (give <collision name=\"...\"> unique names)");
+                u->shape_names.push_back(sh.name);
+            }
+    }
     /* masses after merging; the segments of check points */
     for (size_t i = 0; i < u->bodies.size(); i++) {
         UBody &b = u->bodies[i];
@@ -683,6 +695,13 @@ extern "C" const char *cd_urdf_warnings(const cd_urdf *u) { return u ? u->warnin
 extern "C" const char *cd_urdf_robot_name(const cd_urdf *u) { return u ? u->robot.c_str() : nullptr; }
 
 extern "C" int cd_urdf_njoint(const cd_urdf *u) { return u ? (int)u->joint_body.size() : 0; }
+
+extern "C" int cd_urdf_nshape(const cd_urdf *u) { return u ? (int)u->shape_names.size() : 0; }
+
+extern "C" const char *cd_urdf_shape_name(const cd_urdf *u, int k)
+{
+    return u && k >= 0 && k < (int)u->shape_names.size() ? u->shape_names[(size_t)k].c_str() : nullptr;
+}
 
 extern "C" int cd_urdf_joint_index(const cd_urdf *u, const char *joint)
 {
