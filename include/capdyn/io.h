@@ -42,6 +42,8 @@ typedef struct {
     int capture_palm;      /* the palm body ([gripper] mounted with system/attach: that link), -1 = the hand's base */
     double capture_palm_pos[3], capture_palm_rot[9]; /* the palm frame on it ([gripper] palm.position, rpy_deg) */
     cd_ctrl_config *control; /* [control]: the built-in capture controller (cd_ctrl_create), NULL if none; owned */
+    char *imported;        /* systems imported from URDF: their trees (cd_urdf_describe), "" if none; owned */
+    char *warnings;        /* loader warnings, one per line (a non-convex URDF mesh hulled), "" if none; owned */
 } cd_scenario;
 
 /* Loads, validates and builds a scenario. overrides are "key.path=value"
@@ -65,6 +67,67 @@ cd_status cd_scenario_setup(const cd_scenario *sc, cd_data **dp, cd_ctrl **ctlp,
 
 /* Frees a scenario and its model; NULL is a no-op. */
 void cd_scenario_free(cd_scenario *sc);
+
+/* ---- URDF import (docs/urdf.md) ------------------------------------------- */
+/* A URDF file read and checked (liburdfdom), ready to be built into a model
+ * as one system: revolute, continuous and prismatic joints become capdyn
+ * joints, a fixed joint merges its child link (mass, inertia, shapes) into
+ * the parent, <collision> boxes, cylinders, spheres and meshes (STL ascii or
+ * binary, OBJ; their convex hull) become shapes. Floating and planar
+ * joints, <mimic>, loops and cycles are refused with the element and its
+ * line. */
+typedef struct cd_urdf cd_urdf;
+
+typedef struct {
+    const char *name;     /* system name (copied); NULL = the URDF robot name */
+    int fixed;            /* 1: fixed base (the root link welded to the world); default 0 (free) */
+    double pos[3];        /* root LINK frame origin, world [m] (the base CoM is placed accordingly) */
+    double quat[4];       /* root link orientation (w, x, y, z), default identity */
+    double vel[3];        /* base CoM velocity, world [m/s] (free base) */
+    double angvel[3];     /* base angular velocity, world [rad/s] (free base) */
+    int ignore_limits;    /* 1: <limit> lower/upper are not made stops; default 0 */
+    double checkpoint_spacing; /* [m] check points along each moving link (docs/urdf.md); 0 (default) = none */
+    double checkpoint_radius;  /* [m] their radius, default 0 */
+    const char *const *q0_joint; /* (nq0) joint names with an initial position, may be NULL */
+    const double *q0;     /* (nq0) [rad | m] */
+    int nq0;
+} cd_urdf_opts;
+
+/* The defaults listed above (by value). */
+cd_urdf_opts cd_urdf_opts_default(void);
+/* Reads and checks a URDF file. Returns NULL with err filled ("FILE:LINE:
+ * <joint name=\"x\">: ...", CD_EINVAL; CD_EIO for a file that cannot be
+ * read, the URDF or a mesh); never prints. Free with cd_urdf_free. */
+cd_urdf *cd_urdf_read(const char *path, cd_error *err);
+/* Adds the URDF's system to m (before cd_model_finalize). Body 0 of the
+ * system is the root link (its frame moved to its CoM), then one body per
+ * moving joint, named after its child link, depth first in file order.
+ * Returns the system id, or -1 with err filled (a NULL u, m or o:
+ * CD_EINVAL naming cd_urdf_build). */
+int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *o, cd_error *err);
+/* The body of joint `joint` in system sys built from u: its id, -2 for a
+ * fixed joint (merged), -1 if u has no such joint. */
+int cd_urdf_joint_body(const cd_urdf *u, const cd_model *m, int sys, const char *joint);
+/* The same before a build: the body's index in the system (1.., the base
+ * is 0), -2 for a fixed joint, -1 if none. */
+int cd_urdf_joint_index(const cd_urdf *u, const char *joint);
+/* Joints of the file (moving and fixed); 0 if u is NULL. */
+int cd_urdf_njoint(const cd_urdf *u);
+/* Shapes cd_urdf_build adds (one per <collision>), and the name of the k-th
+ * in the order added: the <collision name>, else the link's name (LINK_N,
+ * N = 1.., for a link with several); NULL if k is out of range. */
+int cd_urdf_nshape(const cd_urdf *u);
+const char *cd_urdf_shape_name(const cd_urdf *u, int k);
+/* Warnings of the import, one per line ("" if none): a non-convex mesh
+ * replaced by its hull. Owned by u; NULL if u is NULL. */
+const char *cd_urdf_warnings(const cd_urdf *u);
+/* The <robot name>. Owned by u; NULL if u is NULL. */
+const char *cd_urdf_robot_name(const cd_urdf *u);
+/* The imported tree of system sys (bodies, joints, types, masses, limits),
+ * one line each; malloc'd (free it), NULL on bad arguments. */
+char *cd_urdf_describe(const cd_urdf *u, const cd_model *m, int sys);
+/* Frees u; NULL is a no-op. */
+void cd_urdf_free(cd_urdf *u);
 
 /* ---- HDF5 results --------------------------------------------------------- */
 typedef struct cd_h5_writer cd_h5_writer;

@@ -253,6 +253,18 @@ int cli_initial_overlap(const cd_model *m, const cd_data *d, char *msg, size_t n
     return count;
 }
 
+/* the loader's warnings (a non-convex URDF mesh hulled), one line each on stderr */
+static void warn_loader(const char *scenario, const cd_scenario *sc)
+{
+    const char *p = sc->warnings;
+    while (p && *p) {
+        const char *e = strchr(p, '\n');
+        int n = e ? (int)(e - p) : (int)strlen(p);
+        fprintf(stderr, "capdyn: warning: %s: %.*s\n", scenario, n, p);
+        p = e ? e + 1 : p + n;
+    }
+}
+
 /* the warning of check and run: one line on stderr */
 static void warn_initial_overlap(const char *scenario, const cd_model *m, const cd_data *d)
 {
@@ -321,11 +333,13 @@ int cmd_check(int argc, char **argv)
         cd_data_free(d);
     }
     warn_fast_spin(o.scenario, sc);
+    warn_loader(o.scenario, sc);
     printf("%s: OK: '%s': %d system%s, %d bodies (%d joints), %d check points, %d shapes, %d contact slots, "
            "state size %d; %g s, output every %g s\n",
            o.scenario, sc->title ? sc->title : "", m->nsys, m->nsys == 1 ? "" : "s", m->nbody, njoint, m->ncp,
            m->nshape, m->nslot, m->ny, sc->duration, sc->output_dt);
     print_budget(sc);
+    if (sc->imported && sc->imported[0]) printf("imported from URDF:\n%s", sc->imported);
     cd_scenario_free(sc);
     return CLI_OK;
 }
@@ -576,6 +590,7 @@ static int run_setup(run_opts *o, cd_scenario **scp, cd_data **dp, cd_ctrl **ctl
     warn_initial_overlap(o->scenario, m, d);
     warn_workspace(o->scenario, sc, d);
     warn_fast_spin(o->scenario, sc);
+    warn_loader(o->scenario, sc);
     return CLI_OK;
 }
 

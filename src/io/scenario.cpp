@@ -2063,9 +2063,136 @@ struct Builder {
         run.control = std::move(c);
     }
 
+    /* [[system]] urdf = "file.urdf" (docs/urdf.md): the system from a URDF
+     * file (src/io/urdf.cpp), then overrides by joint name in [[system.joint]] */
+    std::vector<std::pair<std::shared_ptr<cd_urdf>, int>> urdfs;
+    std::string warnings;
+    void system_urdf(Node &node, const std::string &path)
+    {
+        Tab t(&node, path,
+              {"name", "urdf", "base", "position", "rpy_deg", "quaternion", "velocity", "angular_velocity",
+               "angular_velocity_deg_s", "prescribed_motion", "ignore_limits", "checkpoint_spacing", "checkpoint_radius", "joint"});
+        Entry *ue = t.get("urdf");
+        std::string file = str_of(*ue->val, t.kp("urdf"));
+        std::filesystem::path fp(file);
+        if (fp.is_relative() && ue->val->loc.file && !ue->val->loc.ovr)
+            fp = std::filesystem::path(*ue->val->loc.file).parent_path() / fp;
+        cd_error uerr{};
+        std::shared_ptr<cd_urdf> u(cd_urdf_read(fp.string().c_str(), &uerr), cd_urdf_free);
+        if (!u) fail_at(ue->val->loc, t.kp("urdf"), uerr.msg, uerr.status == CD_EIO ? CD_EIO : CD_EINVAL);
+        warnings += cd_urdf_warnings(u.get());
+        SysInfo s;
+        s.name = t.get("name") ? name_of_node(*t.get("name")->val, t.kp("name")) : std::string(cd_urdf_robot_name(u.get()));
+        s.loc = node.loc;
+        s.path = path;
+        if (find_sys(s.name))
+            fail_at(t.get("name") ? t.get("name")->val->loc : node.loc, t.kp("name"),
+                    "expected a system name unique in the scenario (systems and targets), got '" + s.name + "' twice");
+        cd_urdf_opts o = cd_urdf_opts_default();
+        o.name = s.name.c_str();
+        if (Entry *e = t.get("base")) o.fixed = choice_of(*e->val, t.kp("base"), {"free", "fixed"}) == "fixed";
+        t.vec("position", 3, o.pos);
+        double R[9];
+        rotation_of(t, R);
+        if (Entry *e = t.get("quaternion")) vec_of(*e->val, t.kp("quaternion"), 4, o.quat);
+        else cd_m3_to_quat(o.quat, R);
+        Entry *w = t.get("angular_velocity"), *wd = t.get("angular_velocity_deg_s");
+        if (w && wd) fail_at(wd->kloc, t.kp("angular_velocity_deg_s"), "give either angular_velocity [rad/s] or angular_velocity_deg_s, not both");
+        if (o.fixed)
+            for (const char *k : {"velocity", "angular_velocity", "angular_velocity_deg_s", "prescribed_motion"})
+                if (Entry *e = t.get(k)) fail_at(e->kloc, t.kp(k), "applies only to a free base (this system has base = \"fixed\")");
+        t.vec("velocity", 3, o.vel);
+        if (w) vec_of(*w->val, t.kp("angular_velocity"), 3, o.angvel);
+        if (wd) {
+            vec_of(*wd->val, t.kp("angular_velocity_deg_s"), 3, o.angvel);
+            for (double &v : o.angvel) v *= DEG;
+        }
+        if (Entry *e = t.get("ignore_limits")) o.ignore_limits = bool_of(*e->val, t.kp("ignore_limits")) ? 1 : 0;
+        o.checkpoint_spacing = t.num("checkpoint_spacing", 0.0, Range::NonNeg);
+        o.checkpoint_radius = t.num("checkpoint_radius", 0.0, Range::NonNeg);
+        /* [[system.joint]]: name first (q0 is needed when the link is made) */
+        std::vector<Node *> jt;
+        std::vector<std::string> jpath, jname;
+        std::vector<const char *> q0n;
+        std::vector<double> q0v;
+        if (Entry *e = t.get("joint")) {
+            std::string p = t.kp("joint");
+            auto v = tables_of(*e->val, p, "[[system.joint]]");
+            for (size_t i = 0; i < v.size(); i++) {
+                jt.push_back(v[i]);
+                jpath.push_back(e->val->kind == NK::Array ? idx(p, i) : p);
+            }
+        }
+        jname.reserve(jt.size());  /* q0n points into it: no reallocation */
+        for (size_t i = 0; i < jt.size(); i++) {
+            Tab j(jt[i], jpath[i], {"name", "q0_deg", "q0", "limit_deg", "limit", "stop", "spring", "damping", "friction", "actuator", "prescribed"});
+            const Node &nn = j.need("name", "the name of a joint of the URDF");
+            jname.push_back(str_of(nn, j.kp("name")));
+            for (size_t k = 0; k < i; k++)
+                if (jname[k] == jname[i]) fail_at(nn.loc, j.kp("name"), "expected each joint once, got '" + jname[i] + "' twice");
+            int ji = cd_urdf_joint_index(u.get(), jname[i].c_str());
+            if (ji == -2) fail_at(nn.loc, j.kp("name"), "expected a moving joint, got '" + jname[i] + "' (a fixed joint: its link is merged into its parent)");
+            if (ji < 0) fail_at(nn.loc, j.kp("name"), "expected the name of a joint of '" + fp.string() + "', got '" + jname[i] + "'");
+            for (const char *k : {"q0_deg", "q0"})
+                if (Entry *qe = j.get(k)) {
+                    q0n.push_back(jname[i].c_str());
+                    q0v.push_back(num_of(*qe->val, j.kp(k), Range::Any) * (k[2] == '_' ? DEG : 1.0));
+                }
+        }
+        o.q0_joint = q0n.data();
+        o.q0 = q0v.data();
+        o.nq0 = (int)q0n.size();
+        s.id = cd_urdf_build(u.get(), m.get(), &o, &err);
+        if (s.id < 0) builder_fail(ue->val->loc, t.kp("urdf"));
+        for (int b = 0; b < m->sys_nbody[s.id]; b++) {
+            int id = m->sys_body_adr[s.id] + b;
+            s.add_body(b == 0 ? "base" : m->body_name[id], id);
+        }
+        for (int k = 0, sh0 = m->nshape - cd_urdf_nshape(u.get()); k < cd_urdf_nshape(u.get()); k++) {
+            s.shape_at.emplace(cd_urdf_shape_name(u.get(), k), s.shapes.size());
+            s.shapes.push_back({cd_urdf_shape_name(u.get(), k), sh0 + k});
+        }
+        if (Entry *e = t.get("prescribed_motion"))
+            if (bool_of(*e->val, t.kp("prescribed_motion")) && cd_model_prescribe_base(m.get(), s.id, o.vel, o.angvel, &err) != CD_OK)
+                builder_fail(e->val->loc, t.kp("prescribed_motion"));
+        /* the overrides, by joint name */
+        for (size_t i = 0; i < jt.size(); i++) {
+            Tab j(jt[i], jpath[i], {"name", "q0_deg", "q0", "limit_deg", "limit", "stop", "spring", "damping", "friction", "actuator", "prescribed"});
+            int id = cd_urdf_joint_body(u.get(), m.get(), s.id, jname[i].c_str());  /* checked above: a moving joint */
+            bool rev = m->body_jnt_type[id] == CD_JOINT_REVOLUTE;
+            const char *wq = rev ? "q0" : "q0_deg", *wl = rev ? "limit" : "limit_deg";
+            for (const char *k : {wq, wl})
+                if (Entry *e = j.get(k)) fail_at(e->kloc, j.kp(k), std::string("does not apply to a ") + (rev ? "revolute" : "prismatic") + " joint");
+            double lim[2];
+            const double *lp = nullptr;
+            const char *limk = rev ? "limit_deg" : "limit";
+            double sc = rev ? DEG : 1.0;
+            if (Entry *e = j.get(limk)) {
+                vec_of(*e->val, j.kp(limk), 2, lim, Range::Any, "an array [lower, upper]");
+                if (!(lim[0] < lim[1])) fail_at(e->val->loc, j.kp(limk), "expected lower < upper, got " + render(*e->val));
+                lp = lim;
+            } else if (m->body_lim_id[id] >= 0) {
+                lim[0] = m->body_limit[6 * id] / sc;
+                lim[1] = m->body_limit[6 * id + 1] / sc;
+                lp = lim;
+            }
+            bool props = false;
+            for (const char *k : {"limit_deg", "limit", "stop", "spring", "damping", "friction", "prescribed"}) props = props || j.get(k);
+            if (props) joint_props(j, id, rev, lp);
+            if (Entry *e = j.get("actuator")) actuator(*e->val, j.kp("actuator"), id, rev);
+        }
+        sys_at.emplace(s.name, sys.size());
+        sys.push_back(s);
+        urdfs.emplace_back(u, s.id);
+    }
+
     /* [[system]] (is_target = false) or the [[target]] sugar */
     void system(Node &node, const std::string &path, bool is_target)
     {
+        if (!is_target && node.kind == NK::Table && node.find("urdf")) {
+            system_urdf(node, path);
+            return;
+        }
         std::vector<std::string> keys = {"name",        "mass",     "inertia",          "position",
                                          "rpy_deg",     "quaternion", "velocity",       "angular_velocity",
                                          "angular_velocity_deg_s", "checkpoints", "shape", "prescribed_motion"};
@@ -2645,6 +2772,8 @@ void free_scenario(cd_scenario *sc)
     std::free(sc->text);
     std::free(sc->overrides);
     std::free(sc->control);
+    std::free(sc->imported);
+    std::free(sc->warnings);
     std::free(sc);
 }
 
@@ -2705,6 +2834,20 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->max_rhs_evals = run.max_rhs_evals;
     sc->min_steps = run.min_steps;
     sc->min_rhs_evals = run.min_rhs_evals;
+    {   /* URDF imports: the trees `capdyn check` prints, and the warnings */
+        std::string tree;
+        for (auto &x : b.urdfs) {
+            char *d = cd_urdf_describe(x.first.get(), sc->model, x.second);
+            if (d) tree += d;
+            std::free(d);
+        }
+        sc->imported = cdup(tree);
+        sc->warnings = cdup(b.warnings);
+        if (!sc->imported || !sc->warnings) {
+            free_scenario(sc);
+            throw std::bad_alloc();
+        }
+    }
     return sc;
 }
 
