@@ -335,7 +335,7 @@ Test(urdf, urdfdom_errors_are_captured_into_one_line)
 }
 
 /* scenarios/capture_urdf_arm.toml runs its capture to the verdict of the
- * TOML chaser's run (capture_handrail_tumbling.toml: captured at 4.17 s) */
+ * TOML chaser's run (capture_handrail_tumbling.toml: captured at 4.19 s; 4.17 s before the bristle slip law of docs/contact.md) */
 Test(urdf, capture_with_the_urdf_chaser_is_captured, .timeout = 300)
 {
     char dir[512], scen[1024], *out = NULL, *errs = NULL;
@@ -345,7 +345,7 @@ Test(urdf, capture_with_the_urdf_chaser_is_captured, .timeout = 300)
     lu_tmpdir(dir, sizeof dir);
     rc = lu_capdyn(dir, &out, &errs, args);
     cr_expect_eq(rc, 0, "%s", errs ? errs : "");
-    cr_expect(out && strstr(out, "capture     captured at t = 4.17 s"), "%s", out ? out : "(null)");
+    cr_expect(out && strstr(out, "capture     captured at t = 4.19 s"), "%s", out ? out : "(null)");
     free(out);
     free(errs);
     lu_rm_rf(dir);
