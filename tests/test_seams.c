@@ -779,6 +779,37 @@ Test(seams, coulomb_joint_stops_at_the_coulomb_distance_without_spring_back)
     cd_model_free(m);
 }
 
+Test(seams, a_joint_moving_at_t0_reports_the_applied_friction_at_t0)
+{
+    /* The slider of the test above, launched at 0.1 m/s: its friction starts
+     * in stick with the stick damper's -c_s v0 = -400 x 0.1 = -40 N, beyond
+     * T_c = 2 N, so it slips at t = 0. The data right after creation (what a
+     * t = 0 sample reads) holds the applied force, -T_c, in slip mode, with
+     * the t = 0 event logged once; the first advance adds no second one. */
+    int b;
+    cd_model *m = cd_model_create();
+    cd_joint_props p = cd_joint_props_default();
+    cd_link_desc l = cd_link_desc_default();
+    cd_error e;
+    cd_data *d;
+    add_system(m, "rail", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.parent = 0; l.type = CD_JOINT_PRISMATIC; l.axis[0] = 1; l.axis[2] = 0; l.mass = 2.0; l.qd0 = 0.1;
+    b = cd_model_add_link(m, 0, &l, &e);
+    cr_assert(b > 0, "%s", e.msg);
+    p.friction = 2.0;
+    cr_assert_eq(cd_model_set_joint(m, b, &p, &e), CD_OK, "%s", e.msg);
+    fin(m);
+    d = mk(m);
+    cr_expect_eq(d->fric_mode[0], CD_MODE_SLIP, "slipping at t = 0");
+    cr_expect_eq(d->fric_force[0], -2.0, "applied friction at t = 0: %.9g N, expected -T_c = -2 N", d->fric_force[0]);
+    cr_expect_eq(d->qfrc_passive[m->body_dof[b]], -2.0, "the same in the generalized forces");
+    cr_expect_eq(count_kind(d, CD_EV_STICK_SLIP), 1, "the t = 0 slip logged");
+    adv(m, d, 1e-3);
+    cr_expect_eq(count_kind(d, CD_EV_STICK_SLIP), 1, "logged once");
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
 /* ---- 5. prescribed motion --------------------------------------------------------- */
 
 Test(seams, prescribed_joint_follows_its_profile_and_reports_the_torque)
