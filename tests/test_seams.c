@@ -742,6 +742,74 @@ Test(seams, coulomb_joint_friction_sticks_below_and_slides_above)
     cd_model_free(m); cd_model_free(m2);
 }
 
+Test(seams, coulomb_joint_stops_at_the_coulomb_distance_without_spring_back)
+{
+    /* A 2 kg slider launched at v0 = 0.1 m/s against Coulomb friction
+     * T_c = 2 N and nothing else decelerates at T_c/m = 1 m/s^2 and stops
+     * after v0^2 m / (2 T_c) = 5 mm (closed form). At rest Coulomb friction
+     * carries no load, so the joint stays there: within 1e-8 m at t = 1 s
+     * (the old re-stick anchor preloaded the stick spring with T_c and sprang
+     * it back by T_c / k_s = 1e-4 m), and the held friction torque is 0.
+     * The joint re-sticks at the rate -v_reg, which the stick spring-damper
+     * then stops within about v_reg / sqrt(k_s / m) = 1e-8 m at the default
+     * v_reg = 1e-6 m/s (measured 2.0e-8 m); v_reg = 1e-8 m/s here keeps that
+     * residue far below the tolerance. */
+    int b;
+    cd_model *m = cd_model_create();
+    cd_joint_props p = cd_joint_props_default();
+    cd_link_desc l = cd_link_desc_default();
+    cd_error e;
+    cd_data *d;
+    double v0 = 0.1, Tc = 2.0, M = 2.0, xs = v0 * v0 * M / (2.0 * Tc);
+    add_system(m, "rail", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.parent = 0; l.type = CD_JOINT_PRISMATIC; l.axis[0] = 1; l.axis[2] = 0; l.mass = M; l.qd0 = v0;
+    b = cd_model_add_link(m, 0, &l, &e);
+    cr_assert(b > 0, "%s", e.msg);
+    p.friction = Tc;
+    cr_assert_eq(cd_model_set_joint(m, b, &p, &e), CD_OK, "%s", e.msg);
+    m->opt.rtol = 1e-11; m->opt.atol = 1e-14; m->opt.h_max = 1e-3; m->opt.v_reg = 1e-8;
+    fin(m);
+    d = mk(m);
+    adv(m, d, 1.0);
+    cr_expect_eq(count_kind(d, CD_EV_SLIP_STICK), 1, "one slip -> stick (the stop)");
+    cr_expect_lt(fabs(cd_joint_q(m, d, b) - xs), 1e-8, "q = %.12g m, Coulomb distance %.12g m", cd_joint_q(m, d, b), xs);
+    cr_expect_lt(fabs(cd_joint_qd(m, d, b)), 1e-8, "at rest: %.3g m/s", cd_joint_qd(m, d, b));
+    cr_expect_lt(fabs(d->fric_force[0]), 1e-6, "no load, no friction at rest: %.3g N", d->fric_force[0]);
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(seams, a_joint_moving_at_t0_reports_the_applied_friction_at_t0)
+{
+    /* The slider of the test above, launched at 0.1 m/s: its friction starts
+     * in stick with the stick damper's -c_s v0 = -400 x 0.1 = -40 N, beyond
+     * T_c = 2 N, so it slips at t = 0. The data right after creation (what a
+     * t = 0 sample reads) holds the applied force, -T_c, in slip mode, with
+     * the t = 0 event logged once; the first advance adds no second one. */
+    int b;
+    cd_model *m = cd_model_create();
+    cd_joint_props p = cd_joint_props_default();
+    cd_link_desc l = cd_link_desc_default();
+    cd_error e;
+    cd_data *d;
+    add_system(m, "rail", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    l.parent = 0; l.type = CD_JOINT_PRISMATIC; l.axis[0] = 1; l.axis[2] = 0; l.mass = 2.0; l.qd0 = 0.1;
+    b = cd_model_add_link(m, 0, &l, &e);
+    cr_assert(b > 0, "%s", e.msg);
+    p.friction = 2.0;
+    cr_assert_eq(cd_model_set_joint(m, b, &p, &e), CD_OK, "%s", e.msg);
+    fin(m);
+    d = mk(m);
+    cr_expect_eq(d->fric_mode[0], CD_MODE_SLIP, "slipping at t = 0");
+    cr_expect_eq(d->fric_force[0], -2.0, "applied friction at t = 0: %.9g N, expected -T_c = -2 N", d->fric_force[0]);
+    cr_expect_eq(d->qfrc_passive[m->body_dof[b]], -2.0, "the same in the generalized forces");
+    cr_expect_eq(count_kind(d, CD_EV_STICK_SLIP), 1, "the t = 0 slip logged");
+    adv(m, d, 1e-3);
+    cr_expect_eq(count_kind(d, CD_EV_STICK_SLIP), 1, "logged once");
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
 /* ---- 5. prescribed motion --------------------------------------------------------- */
 
 Test(seams, prescribed_joint_follows_its_profile_and_reports_the_torque)

@@ -153,7 +153,10 @@ cd_options cd_options_default(void);
 cd_status cd_options_check(const cd_options *o, cd_error *err);
 
 /* ---- contact law ---------------------------------------------------------- */
-/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3); no pull by
+/* Normal:     f_n = K x^p + D |xdot|^q sign(xdot)  (paper eq. 3, damping
+ *             CD_DAMP_LINEAR, the default), or Hunt-Crossley (CD_DAMP_HUNT_CROSSLEY,
+ *             Hunt & Crossley 1975): f_n = K x^p + D |x|^p |xdot|^q sign(xdot), whose
+ *             damper vanishes with x (no force jump at onset); no pull by
  *             default, or plain Kelvin-Voigt (`pull`) until x returns to 0.
  * Tangential: stick  f_t = -(K_t z^pt + D_t v_t^qt) (paper eq. 4, signed
  *                    vector powers; pt = qt = 1: linear)
@@ -169,10 +172,15 @@ typedef struct {
                              pt >= 1, qt > 0, default 1 (linear) */
     int pull;             /* 0 (default): no pull, f_n >= 0, separation where min(K x, f_raw) reaches 0;
                              1: plain Kelvin-Voigt, contact kept until x returns to 0, f_n may pull */
+    int damping;          /* CD_DAMP_LINEAR (default, eq. 3: D [N (s/m)^q]) or CD_DAMP_HUNT_CROSSLEY
+                             (D |x|^p xdot^q: D [N (s/m)^q / m^p]) */
 } cd_contact_law;
 
+/* normal damping laws of cd_contact_law.damping */
+enum { CD_DAMP_LINEAR = 0, CD_DAMP_HUNT_CROSSLEY = 1 };
+
 /* Linear law K = 1e5 N/m, D = 100 N s/m, p = q = 1, K_t = K, D_t = D, mu = 0.5,
- * pt = qt = 1, no pull. */
+ * pt = qt = 1, no pull, linear damping (CD_DAMP_LINEAR). */
 cd_contact_law cd_contact_law_default(void);
 
 /* The paper's rule (sec. 2): the contact is k_ratio (10..100) times stiffer than

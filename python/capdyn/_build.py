@@ -65,6 +65,7 @@ cd_status cd_options_check(const cd_options *o, cd_error *err);
 typedef struct {
     double K, D, p, q, Kt, Dt, mu_s, mu_k, pt, qt;
     int pull;
+    int damping;
     ...;
 } cd_contact_law;
 cd_contact_law cd_contact_law_default(void);

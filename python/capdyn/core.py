@@ -388,7 +388,8 @@ class Model(_ModelView):
 
     def add_law(self, **fields):
         """A contact law (cd_contact_law fields: K, D, p, q, Kt, Dt, mu_s, mu_k,
-        pt, qt, pull); unspecified fields from cd_contact_law_default()."""
+        pt, qt, pull, damping: 0 linear, 1 Hunt-Crossley, docs/contact.md);
+        unspecified fields from cd_contact_law_default()."""
         d = ffi.new("cd_contact_law *", lib.cd_contact_law_default())
         _fill(d, fields, [], "add_law")
         return self._call(lib.cd_model_add_law, d)

@@ -37,12 +37,6 @@
 #include "geometry.h"
 #include "contact.h"
 
-static double sgnpow(double x, double p)
-{
-    if (p == 1.0) return x;
-    return x >= 0 ? pow(x, p) : -pow(-x, p);
-}
-
 /* world pose of every shape, once per evaluation (d->shape_R, shape_xw) */
 static void shape_poses(const cd_model *m, cd_data *d)
 {
@@ -186,7 +180,7 @@ static int open_outputs(const cd_model *m, const cd_data *d, int k, double *x, d
     double pw[3], s[3];
     if (slot_geometry(m, d, k, 1, pw, x, n, s) != 0) return -1;
     slot_rates(m, d, k, *x, n, s, c, xd, vt);
-    *fraw = L->K * sgnpow(*x, L->p) + L->D * sgnpow(*xd, L->q);
+    *fraw = cd_law_normal(L, *x, *xd, NULL, NULL);
     return 0;
 }
 
@@ -354,8 +348,8 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
         return;
     }
     slot_rates(m, d, k, x, n, s, c, &xd, vt);
-    /* eq. (3) */
-    fraw = L->K * sgnpow(x, L->p) + L->D * sgnpow(xd, L->q);
+    /* eq. (3), or Hunt-Crossley (contact.h) */
+    fraw = cd_law_normal(L, x, xd, NULL, NULL);
     if (mode != CD_MODE_OPEN) {
         fn = fraw; /* >= 0 between events (no pull): separation is located where it reaches 0;
                       with `pull` it may be negative until x returns to 0 */

@@ -2,6 +2,40 @@
 #ifndef CD_CONTACT_H
 #define CD_CONTACT_H
 #include "capdyn/sim.h"
+#include <math.h>
+
+/* |x|^p sign(x); p = 1: x */
+static inline double cd_sgnpow(double x, double p)
+{
+    if (p == 1.0) return x;
+    return x >= 0 ? pow(x, p) : -pow(-x, p);
+}
+
+/* The normal law's raw force (before the no-pull rule), one definition for
+ * the evaluation (contact.c) and the structured Jacobian (jac.c):
+ *   linear (paper eq. 3):       f = K x^p + D xdot^q
+ *   Hunt-Crossley (1975):       f = K x^p + D |x|^p xdot^q
+ * (signed powers). With dfx, dfv non-NULL: df/dx and df/dxdot, with |x| and
+ * |xdot| floored (1e-12 m, 1e-9 m/s) where a power below 1 is infinitely
+ * steep at 0 (the Jacobian only has to carry the stiff modes). */
+static inline double cd_law_normal(const cd_contact_law *L, double x, double xd, double *dfx, double *dfv)
+{
+    double ax = fabs(x) > 1e-12 ? fabs(x) : 1e-12, axd = fabs(xd) > 1e-9 ? fabs(xd) : 1e-9;
+    double xq = cd_sgnpow(xd, L->q);
+    /* the linear law's derivatives in the order jac.c always used (bit for bit) */
+    double dk = L->p == 1.0 ? L->K : L->K * L->p * pow(ax, L->p - 1.0);
+    double dd = L->q == 1.0 ? L->D : L->D * L->q * pow(axd, L->q - 1.0);
+    if (L->damping == CD_DAMP_HUNT_CROSSLEY) {
+        double xp = L->p == 1.0 ? fabs(x) : pow(fabs(x), L->p);
+        double kx = L->p == 1.0 ? 1.0 : L->p * pow(ax, L->p - 1.0); /* d|x|^p/d|x| */
+        if (dfx) *dfx = dk + L->D * (x >= 0 ? 1.0 : -1.0) * kx * xq;
+        if (dfv) *dfv = dd * xp;
+        return L->K * cd_sgnpow(x, L->p) + L->D * xp * xq;
+    }
+    if (dfx) *dfx = dk;
+    if (dfv) *dfv = dd;
+    return L->K * cd_sgnpow(x, L->p) + L->D * xq;
+}
 
 /* Evaluates every slot after cd_kinematics: fills the slot outputs, adds the
  * wrenches to d->body_fext and writes the anchors' derivatives into zdot

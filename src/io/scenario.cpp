@@ -1196,9 +1196,11 @@ struct SysInfo {
 struct LawState {
     cd_contact_law law;
     bool kt_set = false, dt_set = false, mu_set = false;
+    int d_law = CD_DAMP_LINEAR; /* the damping law D was given for (its units differ) */
 };
 
-const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "p_t", "q_t", "mu_max", "mu", "rule", "pull"};
+const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "p_t", "q_t", "mu_max", "mu", "rule", "pull",
+                                           "damping_law"};
 
 struct Builder {
     std::unique_ptr<cd_model, ModelDel> m;
@@ -2301,6 +2303,19 @@ struct Builder {
         }
         if (K) l.K = num_of(*K->val, t.kp("K"), Range::Pos);
         if (D) l.D = num_of(*D->val, t.kp("D"), Range::NonNeg);
+        /* normal damping: the paper's linear D xdot^q, or Hunt-Crossley D x^p xdot^q
+         * (docs/contact.md); D's units differ, so a D is never carried across laws */
+        Entry *dl = t.get("damping_law");
+        if (dl) l.damping = choice_of(*dl->val, t.kp("damping_law"), {"linear", "hunt_crossley"}) == "linear"
+                                ? CD_DAMP_LINEAR : CD_DAMP_HUNT_CROSSLEY;
+        if (D || rule) s.d_law = l.damping;
+        if (rule && l.damping == CD_DAMP_HUNT_CROSSLEY)
+            fail_at(rule->kloc, t.kp("rule"), "the 'rule' gives a linear damper D = 2 zeta sqrt(K m); with damping_law = "
+                                              "\"hunt_crossley\" give D [N s/m^(p+1)] instead");
+        if (s.d_law != l.damping)
+            fail_at(dl ? dl->val->loc : t.n->loc, t.kp("D"),
+                    std::string("expected D for damping_law = \"") + (l.damping ? "hunt_crossley" : "linear") +
+                        "\" here (the D in force was given for the other law, in other units)");
         if (Entry *e = t.get("p")) l.p = num_of(*e->val, t.kp("p"), Range::Ge1);
         if (Entry *e = t.get("q")) l.q = num_of(*e->val, t.kp("q"), Range::Pos);
         if (Entry *e = t.get("p_t")) l.pt = num_of(*e->val, t.kp("p_t"), Range::Ge1);
@@ -2309,6 +2324,9 @@ struct Builder {
         if (Entry *e = t.get("K_t")) { l.Kt = num_of(*e->val, t.kp("K_t"), Range::Pos); s.kt_set = true; }
         else if (!s.kt_set) l.Kt = l.K;
         if (Entry *e = t.get("D_t")) { l.Dt = num_of(*e->val, t.kp("D_t"), Range::NonNeg); s.dt_set = true; }
+        else if (!s.dt_set && l.damping == CD_DAMP_HUNT_CROSSLEY)
+            fail_at(t.n->loc, t.kp("D_t"), "expected D_t [N s/m] with damping_law = \"hunt_crossley\" (the tangential "
+                                           "damper stays linear, so it cannot default to D)");
         else if (!s.dt_set) l.Dt = l.D;
         Entry *ms = t.get("mu_max"), *mk = t.get("mu");
         if (ms) l.mu_s = num_of(*ms->val, t.kp("mu_max"), Range::NonNeg);

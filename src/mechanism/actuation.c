@@ -204,6 +204,30 @@ void cd_fric_functions(const cd_model *m, const cd_data *d, int i, int forgive, 
     g[1] = 1.0;
 }
 
+/* The friction torque that stops joint i's acceleration at the evaluated
+ * state (d->udot, with the sliding torque -T_c s applied): with the inverse
+ * mass matrix's diagonal entry w = (H^-1)_jj of its system, a torque change
+ * dtau changes qdd_j by w dtau, so tau_hold = tau_slide - qdd_j / w, kept in
+ * the friction band [-T_c, T_c] (Coulomb at rest). H and its Cholesky factor
+ * go to d->H, the column of L^-1 to d->work (scratch of an event, not a step). */
+static double fric_hold(const cd_model *m, cd_data *d, int i)
+{
+    int b = m->fric_body[i], s = m->body_sys[b], n = m->sys_ndof[s], j = m->body_dof[b] - m->sys_v_adr[s], r, k;
+    double Tc = m->body_fric[3 * b], w = 0.0, *y = d->work, tau;
+    cd_mass_matrix(m, d, s, d->H);
+    if (cd_chol_decomp(d->H, n) != 0) return d->fric_force[i];
+    /* y = L^-1 e_j (zero above j), w = |y|^2 */
+    for (r = j; r < n; r++) {
+        double acc = r == j ? 1.0 : 0.0;
+        for (k = j; k < r; k++) acc -= d->H[r * n + k] * y[k];
+        y[r] = acc / d->H[r * n + r];
+        w += y[r] * y[r];
+    }
+    if (!(w > 0)) return d->fric_force[i];
+    tau = d->fric_force[i] - d->udot[m->body_dof[b]] / w;
+    return tau > Tc ? Tc : tau < -Tc ? -Tc : tau;
+}
+
 int cd_fric_transition(const cd_model *m, cd_data *d, int i, cd_event *ev)
 {
     int b = m->fric_body[i], from = d->fric_mode[i];
@@ -221,8 +245,14 @@ int cd_fric_transition(const cd_model *m, cd_data *d, int i, cd_event *ev)
         d->fric_mode[i] = CD_MODE_SLIP;
         ev->kind = CD_EV_STICK_SLIP;
     } else {
-        /* anchor so that the torque is continuous: -(k z + c qdot) = -T_c s */
-        d->y[m->ny_fric_adr + i] = (F[0] * d->fric_dir[i] - F[2] * cd_joint_qd(m, d, b)) / F[1];
+        /* The joint has stopped. Coulomb friction at rest is a reaction: it
+         * takes whatever torque keeps the joint at rest, up to T_c, not the
+         * sliding value T_c (anchoring at -(k z + c qdot) = -T_c s preloaded
+         * the stick spring with T_c and sprang the joint back by T_c / k_s
+         * once the drive was gone, issue 22). The anchor gives the stick
+         * spring the holding torque at the current state. */
+        double tau = fric_hold(m, d, i);
+        d->y[m->ny_fric_adr + i] = -(tau + F[2] * cd_joint_qd(m, d, b)) / F[1];
         d->fric_mode[i] = CD_MODE_STICK;
         ev->kind = CD_EV_SLIP_STICK;
     }

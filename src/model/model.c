@@ -127,6 +127,7 @@ cd_contact_law cd_contact_law_default(void)
     l.mu_s = 0.5; l.mu_k = 0.5;
     l.pt = 1.0; l.qt = 1.0;
     l.pull = 0;
+    l.damping = CD_DAMP_LINEAR;
     return l;
 }
 
@@ -599,6 +600,11 @@ int cd_model_add_law(cd_model *m, const cd_contact_law *l, cd_error *err)
     if (!(l->pt >= 1) || !isfinite(l->pt)) { seterr(err, CD_EINVAL, "contact law: p_t must be >= 1, got %g", l->pt); return -1; }
     if (!(l->qt > 0) || !isfinite(l->qt)) { seterr(err, CD_EINVAL, "contact law: q_t must be > 0, got %g", l->qt); return -1; }
     if (l->pull != 0 && l->pull != 1) { seterr(err, CD_EINVAL, "contact law: pull must be 0 or 1, got %d", l->pull); return -1; }
+    if (l->damping != CD_DAMP_LINEAR && l->damping != CD_DAMP_HUNT_CROSSLEY) {
+        seterr(err, CD_EINVAL, "contact law: damping must be CD_DAMP_LINEAR (0) or CD_DAMP_HUNT_CROSSLEY (1), got %d",
+               l->damping);
+        return -1;
+    }
     if (!(l->mu_k >= 0) || !(l->mu_k <= l->mu_s)) {
         seterr(err, CD_EINVAL, "contact law: mu must be in [0, mu_max=%g], got %g", l->mu_s, l->mu_k);
         return -1;

@@ -431,7 +431,15 @@ cd_status cd_integ_initial_modes(const cd_model *m, cd_data *d, cd_error *err)
         cd_status st = cd_equilibrium_start(m, d, err);
         if (st != CD_OK) return st;
     }
-    (void)cd_forward(m, d);
+    /* the switches due at t = 0 (e.g. a joint friction that starts moving
+     * slips at once) are resolved here, not at the first advance, so that the
+     * data a caller reads or samples at t = 0 holds the forces that are
+     * applied (issue 22: a t = 0 sample showed a stick damper's -104 N that
+     * never acted); the first advance re-checks and finds them settled */
+    {
+        int changed;
+        if (settle_modes(m, d, (cd_integ *)d->integ, &changed) != CD_OK) (void)cd_forward(m, d);
+    }
     return CD_OK;
 }
 

@@ -24,6 +24,7 @@
 #include "jac.h"
 #include "../math/cd_math.h"
 #include "../mechanism/actuation.h"
+#include "../contact/contact.h"
 
 #include <stdint.h>
 #include <string.h>
@@ -183,13 +184,15 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     const double *n = d->slot_normal + 3 * k, *RB = d->body_R + 9 * m->shape_body[m->slot_shape[k]];
-    double x = d->slot_x[k], xd = d->slot_xdot[k], fn = d->slot_fn[k], P[9], dfx, dfv, axd = fabs(xd);
+    double x = d->slot_x[k], xd = d->slot_xdot[k], fn = d->slot_fn[k], P[9], dfx, dfv, dfk;
     int i;
     for (i = 0; i < 9; i++) P[i] = (i % 4 == 0) ? 1.0 : 0.0;
     m3_outer_add(P, -1.0, n, n);
-    dfx = L->p == 1.0 ? L->K : L->K * L->p * pow(fabs(x) > 1e-12 ? fabs(x) : 1e-12, L->p - 1.0);
-    dfv = L->q == 1.0 ? L->D : L->D * L->q * pow(axd > 1e-9 ? axd : 1e-9, L->q - 1.0);
-    /* normal, eq. (3): f_n = K x^p + D xdot^q, x' = -n.dp, xdot = -n.v */
+    /* the normal law's partials (contact.h: linear eq. (3) or Hunt-Crossley) */
+    (void)cd_law_normal(L, x, xd, &dfx, &dfv);
+    /* the spring's share alone: the slip law's cone rate uses only it (contact.c) */
+    dfk = L->p == 1.0 ? L->K : L->K * L->p * pow(fabs(x) > 1e-12 ? fabs(x) : 1e-12, L->p - 1.0);
+    /* normal: f_n(x, xdot), x' = -n.dp, xdot = -n.v */
     memset(Av, 0, 9 * sizeof(double));
     memset(Ap, 0, 9 * sizeof(double));
     memset(Az, 0, 9 * sizeof(double));
@@ -271,7 +274,7 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
         if (!(nu > 0) || !(fn > 0)) return;
         cd_v3_scale(uh, u, 1.0 / nu);
         memcpy(dva, P, sizeof dva);
-        if (L->pt == 1.0) m3_outer_add(dva, L->mu_k * dfx / L->Kt, st, n);
+        if (L->pt == 1.0) m3_outer_add(dva, L->mu_k * dfk / L->Kt, st, n);
         /* -mu uh (df_n/dv) - mu f_n / |u| (I - uh uhᵀ) dva/dv */
         m3_outer_add(Av, L->mu_k * dfv, uh, n);
         m3_outer_add(Ap, L->mu_k * dfx, uh, n);
