@@ -60,7 +60,7 @@ set lmargin 10
 set rmargin 28
 set multiplot layout 2,1 title ttl noenhanced
 
-set ylabel "normal force f_n [N]"
+set ylabel "normal force f_n at samples [N]"
 set yrange [0:FN]
 unset xlabel
 set format x ""
@@ -70,7 +70,7 @@ plot contacts using 1:($4 > 0 ? FN : 0) with filledcurves y1=0 lc rgb "#e04040" 
      (nev > 0 ? events : NaN) using 1:($2 == 1 ? 0.935*FN : 1/0) with points pt 11 ps 0.8 lc rgb "#000000" title "separation", \
      (nev > 0 ? events : NaN) using 1:($2 == 10 ? 0.895*FN : 1/0) with impulses lw 2 lc rgb "#8000a0" title "clutch"
 
-set ylabel "tangential force |f_t| [N]"
+set ylabel "tangential force |f_t| at samples [N]"
 set yrange [0:FT]
 set xlabel "time t [s]"
 set format x "%g"
