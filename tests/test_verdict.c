@@ -106,3 +106,31 @@ Test(verdict, a_squeezed_out_object_escapes, .timeout = 300)
     cr_expect(isnan(r.mon.t_capture), "t_capture %g", r.mon.t_capture);
     vrun_close(&r);
 }
+
+/* A cage with contacts: the Space Gripper of Fig. 9 on its cylinder
+ * (scenarios/space_gripper_cylinder.toml) with frictionless contacts
+ * (contact.mu = mu_max = 0). The fingers wrap the cylinder and come to rest
+ * with 5 contacts sliding, but every frictionless normal on a circle passes
+ * through its axis: no contact can push against a torque about the axis, so
+ * the contacts are not in force closure (epsilon = 0, planar analysis) and
+ * the cylinder could turn freely in the hand. Before the taxonomy this was
+ * "captured at 0.547 s" with epsilon 0; now caged at that time, and still
+ * caged at the end (4 s): the contact set changes (a new judgement) but
+ * never closes. */
+Test(verdict, a_frictionless_wrap_is_caged_not_captured, .timeout = 300)
+{
+    static const char *const ov[] = {"contact.mu=0.0", "contact.mu_max=0.0"};
+    vrun r;
+    vrun_open(&r, "scenarios/space_gripper_cylinder.toml", ov, 2);
+    vrun_to(&r, 1.0);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g)", cd_verdict_name(r.mon.verdict),
+                 r.mon.epsilon);
+    cr_expect(fabs(r.mon.t_cage - 0.547) < 1.5e-3, "t_cage %g", r.mon.t_cage);
+    cr_expect_eq(r.mon.epsilon, 0.0, "epsilon at the judgement %g", r.mon.epsilon);
+    cr_expect(isnan(r.mon.t_capture), "t_capture %g", r.mon.t_capture);
+    cr_expect(r.mon.enclosed && hand_contacts(&r) >= 2, "enclosed %d, %d contacts with the hand", r.mon.enclosed,
+              hand_contacts(&r));
+    vrun_to(&r, r.sc->duration);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "at the end: %s", cd_verdict_name(r.mon.verdict));
+    vrun_close(&r);
+}

@@ -118,3 +118,37 @@ Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_on
     free(iout);
     rm_rf(dir);
 }
+
+/* The caged verdict in the texts: `capdyn run` and `capdyn info` of the
+ * frictionless Space Gripper wrap (test_verdict.c: caged at 0.547 s, no force
+ * closure), the sweep line counting it apart from captured, and the table's
+ * verdict code 3. */
+Test(verdict_report, run_info_and_sweep_name_the_cage, .timeout = 120)
+{
+    char dir[64], sc[512], h5[256], sw[256], *out = NULL, *err = NULL, *iout = NULL, *sout = NULL, *tab = NULL;
+    const char *line = "capture     caged at t = 0.547 s\n";
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "space_gripper_cylinder.toml");
+    snprintf(h5, sizeof h5, "%s/cage.h5", dir);
+    snprintf(sw, sizeof sw, "%s/cage_sweep.h5", dir);
+    cr_assert_eq(capdyn(dir, &out, &err, "run", sc, "--set", "contact.mu=0.0", "--set", "contact.mu_max=0.0", "--set",
+                        "simulation.duration=1.0", "-o", h5, (char *)NULL),
+                 0, "%s", err);
+    cr_expect_not_null(strstr(out, line), "%s", out);
+    cr_expect_not_null(strstr(out, "grasp quality epsilon 0 (no force closure)"), "%s", out);
+    cr_assert_eq(capdyn(dir, &iout, &err, "info", h5, (char *)NULL), 0, "%s", err);
+    cr_expect_not_null(strstr(iout, line), "%s", iout);
+    cr_assert_eq(capdyn(dir, &sout, &err, "sweep", sc, "--set", "contact.mu=0.0", "--set", "simulation.duration=1.0",
+                        "--vary", "contact.mu_max=0.0,0.0", "-j", "1", "-o", sw, (char *)NULL),
+                 0, "%s", err);
+    cr_expect_not_null(strstr(sout, "captured 0, caged 2, escaped 0, unresolved 0"), "%s", sout);
+    cr_assert_eq(capdyn(dir, &tab, &err, "sweep", "--table", sw, (char *)NULL), 0, "%s", err);
+    cr_expect_not_null(strstr(tab, "# verdict: 0 unresolved, 1 captured, 2 escaped, 3 caged, -1 none"), "%s", tab);
+    cr_expect_not_null(strstr(tab, "\n0 0.0 0 3 0 "), "variant 0: verdict 3, status 0:\n%s", tab);
+    free(out);
+    free(err);
+    free(iout);
+    free(sout);
+    free(tab);
+    rm_rf(dir);
+}
