@@ -247,8 +247,8 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
     print_wrapped_kv(out, "contacts", line);
     if (nclosed && mfn && mft) {
         contact_table(out, r, mode, mfn, mft, x, nclosed);
-        snprintf(line, sizeof line, "%.6g N (slot %d); peak |ft| at samples %.6g N (slot %d)", mfn[kfn], kfn,
-                 mft[kft], kft);
+        snprintf(line, sizeof line, "%.6g N (slot %d), onset transients included; peak |ft| at samples %.6g N (slot %d)",
+                 mfn[kfn], kfn, mft[kft], kft);
         print_wrapped_kv(out, "peak fn at samples", line);
         if (x && x->fn_body && x->fn_onset) report_step_peaks(out, x, nslot);
     }
