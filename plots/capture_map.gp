@@ -35,9 +35,9 @@ dy = ny > 1 ? (y_hi - y_lo) / (ny - 1) : 1
 set xrange [x_lo - dx / 2 : x_hi + dx / 2]
 set yrange [y_lo - dy / 2 : y_hi + dy / 2]
 
-# verdict colours: captured green, escaped red, unresolved amber, failed
+# verdict colours: captured green, escaped red, caged blue, unresolved amber, failed
 # dark grey, not run (an interrupted sweep) light grey
-vcol(v, s) = (s == -1) ? 0xd0d0d0 : (s != 0) ? 0x505050 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : 0xffbf00
+vcol(v, s) = (s == -1) ? 0xd0d0d0 : (s != 0) ? 0x505050 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : (v == 3) ? 0x1f77b4 : 0xffbf00
 # (the force is read inside: a NaN argument would make the label "nan")
 vlab(s) = (s == -1) ? "not run" : (s != 0) ? "failed" : sprintf("%.1f", column(10))
 
@@ -46,7 +46,7 @@ set ylabel "tumbling rate about the target's x [deg/s]"
 set key off
 set multiplot layout 1, 2 title ttl noenhanced
 
-set title "verdict: green captured, red escaped, amber unresolved\n(cells: peak contact force on the target [N])" noenhanced
+set title "verdict: green captured, red escaped, blue caged, amber unresolved\n(cells: peak fn on the target at samples [N])" noenhanced
 unset colorbox
 plot f using ($2 * 1000):3:(dx / 2):(dy / 2):(vcol($6, $7)) with boxxyerror fs solid 0.85 noborder lc rgb variable, \
      f using ($2 * 1000):3:(vlab($7)) with labels font ",9"

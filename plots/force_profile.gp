@@ -58,7 +58,7 @@ if (nt > 0) {
     plot p."_groups.dat" using 1:($2 > 0 ? yn : 0) with filledcurves y1=0 lc rgb "#e04040" title (anyslip ? "a contact on the target slips" : ""), \
          for [j=1:nt] "" using 1:(column(1+2*j)) with lines lw 1.5 title link(j), \
          for [j=1:nt] "" using 1:(column(1+2*j) > yn ? yn : NaN) with points pt 9 ps 0.9 lc rgb "black" \
-             title (j == 1 && pkn > yn ? sprintf("above the scale (peak %.3g N at %.3g s)", pkn, tpn) : ""), \
+             title (j == 1 && pkn > yn ? sprintf("above the scale (peak at samples %.3g N at %.3g s)", pkn, tpn) : ""), \
          NaN with lines lw 0.8 lc rgb "grey45" title (nclutch > 0 ? sprintf("clutch event (%d)", nclutch) : ""), \
          NaN with lines lw 0.8 dt 2 lc rgb "grey45" title (nsched > 0 ? sprintf("schedule row change (%d)", nsched) : "")
 } else {
@@ -75,7 +75,7 @@ if (nt > 0) {
     plot p."_groups.dat" using 1:($2 > 0 ? yt : 0) with filledcurves y1=0 lc rgb "#e04040" notitle, \
          for [j=1:nt] "" using 1:(column(2+2*j)) with lines lw 1.5 title link(j), \
          for [j=1:nt] "" using 1:(column(2+2*j) > yt ? yt : NaN) with points pt 9 ps 0.9 lc rgb "black" \
-             title (j == 1 && pkt > yt ? sprintf("above the scale (peak %.3g N at %.3g s)", pkt, tpt) : "")
+             title (j == 1 && pkt > yt ? sprintf("above the scale (peak at samples %.3g N at %.3g s)", pkt, tpt) : "")
 } else {
     plot NaN notitle
 }
@@ -87,6 +87,6 @@ if (ns > 0) {
     set xlabel "time t [s]"
     plot for [j=1:ns] p."_groups.dat" using 1:(column(2+2*nt+j)) with lines lw 1.2 title gname(nt + j), \
          for [j=1:ns] "" using 1:(column(2+2*nt+j) > ys ? ys : NaN) with points pt 9 ps 0.9 lc rgb "black" \
-             title (j == 1 && pks > ys ? sprintf("above the scale (peak %.3g N at %.3g s)", pks, tps) : "")
+             title (j == 1 && pks > ys ? sprintf("above the scale (peak at samples %.3g N at %.3g s)", pks, tps) : "")
 }
 unset multiplot

@@ -36,8 +36,8 @@ ny = nvar / nx
 dx = nx > 1 ? (nx_hi - nx_lo) / (nx - 1) / L : 0.01
 dy = ny > 1 ? (ny_hi - ny_lo) / (ny - 1) / L : 0.01
 
-# verdict colours: captured green, escaped red, unresolved amber, failed black
-vcol(v, s) = (s != 0) ? 0x000000 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : 0xffbf00
+# verdict colours: captured green, escaped red, caged blue, unresolved amber, failed black
+vcol(v, s) = (s != 0) ? 0x000000 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : (v == 3) ? 0x1f77b4 : 0xffbf00
 
 set size ratio -1
 set xlabel "x / L (L = total finger length)"
@@ -50,7 +50,7 @@ if (metric eq "verdict") {
 } else {
     set colorbox
     set palette rgbformulae 33,13,10
-    if (metric eq "peak_fn") { set cblabel "peak contact force on the object [N]" }
+    if (metric eq "peak_fn") { set cblabel "peak fn on the object at samples [N]" }
     if (metric eq "t_capture") { set cblabel "time to capture [s] (blank: not captured)" }
 }
 col = (metric eq "peak_fn") ? 10 : 8

@@ -141,7 +141,7 @@ Test(cli, run_reads_back_shapes_and_the_impact_rebound)
     cr_assert_eq(rc, 0, "exit %d, stderr: %s", rc, err);
     cr_expect(strstr(out, "status      ok") != NULL, "summary shows the status: %s", out);
     cr_expect(strstr(out, "onset 1") && strstr(out, "separation 1"), "events by kind in the summary: %s", out);
-    cr_expect(strstr(out, "max force") != NULL);
+    cr_expect(strstr(out, "peak fn over steps") != NULL && strstr(out, "peak fn at samples") != NULL, "%s", out);
     cr_expect(strstr(out, "momentum") != NULL && strstr(out, "energy") != NULL);
     free(out);
     free(err);

@@ -37,7 +37,7 @@ typedef enum { CD_STEP_RKF45, CD_STEP_RKCK, CD_STEP_RK8PD, CD_STEP_RK4IMP, CD_ST
                CD_STEP_ROS34PW2, CD_STEP_NTYPES, ... } cd_stepper;
 typedef enum { CD_FINGER_SPACE, CD_FINGER_TORQUE_SWITCH, CD_FINGER_NTYPES, ... } cd_finger_type;
 typedef enum { CD_MODE_OPEN, CD_MODE_STICK, CD_MODE_SLIP, ... } cd_slot_mode;
-typedef enum { CD_VERDICT_UNRESOLVED, CD_VERDICT_CAPTURED, CD_VERDICT_ESCAPED, ... } cd_verdict;
+typedef enum { CD_VERDICT_UNRESOLVED, CD_VERDICT_CAPTURED, CD_VERDICT_ESCAPED, CD_VERDICT_CAGED, ... } cd_verdict;
 typedef enum { CD_CTRL_APPROACH, CD_CTRL_CLOSING, CD_CTRL_HOLD, CD_CTRL_DETUMBLE, ... } cd_ctrl_phase;
 typedef enum { CD_EV_NKINDS, ... } cd_event_kind;
 typedef enum { CD_OWNER_NKINDS, ... } cd_owner_kind;
@@ -260,6 +260,7 @@ typedef struct {
     double point[3];
     int enclosed;
     double v_rel, w_rel, qd_max;
+    double t_cage, epsilon;
     ...;
 } cd_monitor;
 cd_monitor_opts cd_monitor_opts_default(void);

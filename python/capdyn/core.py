@@ -156,7 +156,7 @@ _PRESC = {"none": lib.CD_PRESCRIBE_NONE, "velocity": lib.CD_PRESCRIBE_VELOCITY,
 _FINGER = {"space": lib.CD_FINGER_SPACE, "torque_switch": lib.CD_FINGER_TORQUE_SWITCH}
 _STEPPERS = {_str(lib.cd_stepper_name(i)): i for i in range(lib.CD_STEP_NTYPES)}
 _VERDICT = {lib.CD_VERDICT_UNRESOLVED: "unresolved", lib.CD_VERDICT_CAPTURED: "captured",
-            lib.CD_VERDICT_ESCAPED: "escaped"}
+            lib.CD_VERDICT_ESCAPED: "escaped", lib.CD_VERDICT_CAGED: "caged"}
 
 
 # ---- options -----------------------------------------------------------------
@@ -1224,7 +1224,8 @@ class Simulation:
         if lib.cd_monitor_quality(mon, self._m, d, eps, fc, _err()) != lib.CD_OK:
             eps[0] = math.nan
         kw = dict(verdict=v, t_capture=mon.t_capture, t_escape=mon.t_escape,
-                  t=mon.t_capture if v == "captured" else mon.t_escape if v == "escaped" else math.nan,
+                  t=mon.t_capture if v == "captured" else mon.t_escape if v == "escaped"
+                  else mon.t_cage if v == "caged" else math.nan,
                   peak_fn=mon.peak_fn, peak_tau=mon.peak_tau, epsilon=eps[0], n_stick=mon.n_stick,
                   n_slip=mon.n_slip, offset=np.array(list(mon.offset)), enclosed=bool(mon.enclosed),
                   v_rel=mon.v_rel, w_rel=mon.w_rel)
@@ -1281,7 +1282,9 @@ class Simulation:
             if stop:
                 r["user_stop"] = True
                 return 1
-        if self._mon is not None and r["until_verdict"] and self._mon.verdict != lib.CD_VERDICT_UNRESOLVED:
+        # a final verdict only: a cage may still become a grip or let go (verdict.h)
+        if self._mon is not None and r["until_verdict"] and self._mon.verdict in (lib.CD_VERDICT_CAPTURED,
+                                                                                  lib.CD_VERDICT_ESCAPED):
             r["verdict_stop"] = True
             return 1
         return 0

@@ -25,6 +25,13 @@ typedef struct {
     int progress;          /* draw the bar */
     double t_end, wall0, last_draw;
     double *fn_max, *ft_max;
+    /* the onset transient (docs/cli.md, "Peak forces"): a contact's steps
+     * from its closing until the law's elastic term K x^p first carries at
+     * least as much as the rest (the damper); fn_onset the largest normal
+     * force inside those windows, fn_body outside them (each nslot, may be
+     * NULL: not kept), onset (nslot) 1 while a slot is in its window */
+    double *fn_onset, *fn_body;
+    unsigned char *onset;
     int drawn;
     /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
      * the step callback stops the run and writes why in budget_msg */
@@ -60,6 +67,8 @@ typedef struct {
     double wall;                /* wall time of the run [s] */
     const double *fn_max;       /* (nslot) max normal force over every step [N] */
     const double *ft_max;       /* (nslot) max |tangential force| over every step [N] */
+    const double *fn_onset;     /* (nslot) max normal force inside onset windows [N] (run_ctx), or NULL */
+    const double *fn_body;      /* (nslot) max normal force outside them [N], or NULL */
     int attitude;               /* 1: the scenario's [control] applies base attitude torque (an external torque) */
 } cli_run_extra;
 

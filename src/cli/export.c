@@ -32,7 +32,9 @@ static const char *export_help =
     "                       then q.JOINT for each joint and qd.JOINT for each joint\n"
     "  contacts [--active]  t nopen nstick nslip fn_sum, then per slot K:\n"
     "                       fn.K ft.K mode.K (|f_t|; mode 0 open 1 stick 2 slip);\n"
-    "                       --active keeps the slots that were ever in contact\n"
+    "                       --active keeps the slots that were ever in contact;\n"
+    "                       forces at the samples (the run summary's 'peak fn\n"
+    "                       over steps' sees every step: docs/cli.md)\n"
     "  slot N               t fn ftx fty ftz ft x xdot px py pz nx ny nz\n"
     "                       vtx vty vtz vt mode (all of one slot)\n"
     "  slots                the static slot table: slot checkpoint body_a body_b\n"
@@ -256,7 +258,7 @@ static int ex_contacts(exp_ctx *c)
     for (k = 0; k < ns; k++)
         if (use[k]) printf(" fn.%d ft.%d mode.%d", k, k, k);
     putchar('\n');
-    puts("# forces [N] (ft = |tangential force|); mode 0 open, 1 stick, 2 slip");
+    puts("# forces [N] at the samples, not between them (ft = |tangential force|); mode 0 open, 1 stick, 2 slip");
     for (k = 0; k < ns; k++)
         if (use[k]) slot_comment(r, k);
     for (j = 0; j < c->nsel; j++) {
@@ -304,7 +306,7 @@ static int ex_slot(exp_ctx *c)
     if (fn && ft && x && xd && pt && nm && vt && mode) {
         puts("# t fn ftx fty ftz ft x xdot px py pz nx ny nz vtx vty vtz vt mode");
         slot_comment(r, (int)k);
-        puts("# N, m, m/s; f_t on the check-point body; normal from the shape toward the check point");
+        puts("# N, m, m/s, at the samples; f_t on the check-point body; normal from the shape toward the check point");
         for (j = 0; j < c->nsel; j++) {
             size_t i = (size_t)c->sel[j], o = i * (size_t)ns + (size_t)k;
             num0(c->t[i], p);

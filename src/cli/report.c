@@ -26,7 +26,8 @@ static double norm3(const double *a) { return sqrt(a[0] * a[0] + a[1] * a[1] + a
 
 static void print_wrapped_kv(FILE *out, const char *key, const char *val)
 {
-    fprintf(out, "%-12s%s\n", key, val);
+    if (strlen(key) >= 12) fprintf(out, "%s  %s\n", key, val);
+    else fprintf(out, "%-12s%s\n", key, val);
 }
 
 /* one line naming a slot: "left/link2 cp 3 -> target (cylinder)" */
@@ -138,10 +139,11 @@ static void report_systems(FILE *out, const cd_h5r *r)
 
 /* ---- contacts ---- */
 
-/* The largest normal and tangential force of every slot (mfn, mft: nslot
- * zeroed on entry), over the samples and, for a run, over every step (x);
- * *kfn, *kft: the slots with the largest of each. Returns the number of
- * slots that were in contact at some time. */
+/* The peak normal and tangential force of every slot at the samples (mfn,
+ * mft: nslot, zeroed on entry); *kfn, *kft: the slots with the largest of
+ * each. The forces over every step (a run's x) are kept apart: they have
+ * their own names (docs/cli.md, "Peak forces"). Returns the number of slots
+ * that were in contact at some time (at a sample, or at a step for a run). */
 static int contact_maxima(const cd_h5r *r, const double *fn, const double *ft, const double *mode,
                           const cli_run_extra *x, double *mfn, double *mft, int *kfn, int *kft)
 {
@@ -155,11 +157,7 @@ static int contact_maxima(const cd_h5r *r, const double *fn, const double *ft, c
             if (a > mft[k]) mft[k] = a;
             if (mode[(size_t)i * nslot + k] != 0) closed_k = 1;
         }
-        if (x) {
-            if (x->fn_max[k] > mfn[k]) mfn[k] = x->fn_max[k];
-            if (x->ft_max[k] > mft[k]) mft[k] = x->ft_max[k];
-            if (x->fn_max[k] > 0) closed_k = 1;
-        }
+        if (x && x->fn_max[k] > 0) closed_k = 1;
         if (closed_k || mfn[k] > 0) nclosed++;
         if (mfn[k] > mfn[*kfn]) *kfn = k;
         if (mft[k] > mft[*kft]) *kft = k;
@@ -167,18 +165,23 @@ static int contact_maxima(const cd_h5r *r, const double *fn, const double *ft, c
     return nclosed;
 }
 
-/* one row per slot that closed (at most 40), with its largest forces and
- * its mode at the last sample */
+/* one row per slot that closed (at most 40), with its peak forces at the
+ * samples, for a run also over the steps (onset transients apart), and its
+ * mode at the last sample */
 static void contact_table(FILE *out, const cd_h5r *r, const double *mode, const double *mfn, const double *mft,
-                          int nclosed)
+                          const cli_run_extra *x, int nclosed)
 {
     long i, n = r->n;
-    int k, nslot = r->nslot, shown = 0;
+    int k, nslot = r->nslot, shown = 0, steps = x && x->fn_body && x->fn_onset;
     char line[1024];
-    fprintf(out, "  %5s  %-48s %11s %12s  %s\n", "slot", "check point -> shape", "max fn [N]", "max|ft| [N]",
-            "mode at end");
+    if (steps)
+        fprintf(out, "  %5s  %-48s %11s %11s %11s %12s  %s\n", "slot", "check point -> shape", "fn smp [N]",
+                "fn step [N]", "onset [N]", "|ft| smp [N]", "mode at end");
+    else
+        fprintf(out, "  %5s  %-48s %11s %12s  %s\n", "slot", "check point -> shape", "fn smp [N]", "|ft| smp [N]",
+                "mode at end");
     for (k = 0; k < nslot; k++) {
-        int closed_k = mfn[k] > 0;
+        int closed_k = mfn[k] > 0 || (x && x->fn_max[k] > 0);
         for (i = 0; !closed_k && i < n; i++) closed_k = mode[(size_t)i * nslot + k] != 0;
         if (!closed_k) continue;
         if (shown++ >= 40) {
@@ -186,9 +189,37 @@ static void contact_table(FILE *out, const cd_h5r *r, const double *mode, const 
             break;
         }
         slot_label(r, k, line, sizeof line);
-        fprintf(out, "  %5d  %-48s %11.4g %12.4g  %s\n", k, line, mfn[k], mft[k],
-                n > 0 ? cd_slot_mode_name((cd_slot_mode)(int)mode[(size_t)(n - 1) * nslot + k]) : "-");
+        if (steps)
+            fprintf(out, "  %5d  %-48s %11.4g %11.4g %11.4g %12.4g  %s\n", k, line, mfn[k], x->fn_body[k],
+                    x->fn_onset[k], mft[k],
+                    n > 0 ? cd_slot_mode_name((cd_slot_mode)(int)mode[(size_t)(n - 1) * nslot + k]) : "-");
+        else
+            fprintf(out, "  %5d  %-48s %11.4g %12.4g  %s\n", k, line, mfn[k], mft[k],
+                    n > 0 ? cd_slot_mode_name((cd_slot_mode)(int)mode[(size_t)(n - 1) * nslot + k]) : "-");
     }
+}
+
+/* a run's peak forces over every step: the physical peak (onset transients
+ * excluded), the onset transient apart, the tangential peak */
+static void report_step_peaks(FILE *out, const cli_run_extra *x, int nslot)
+{
+    char line[1024];
+    int k, kb = 0, ko = 0, kt = 0;
+    for (k = 0; k < nslot; k++) {
+        if (x->fn_body[k] > x->fn_body[kb]) kb = k;
+        if (x->fn_onset[k] > x->fn_onset[ko]) ko = k;
+        if (x->ft_max[k] > x->ft_max[kt]) kt = k;
+    }
+    snprintf(line, sizeof line, "%.6g N (slot %d), onset transients excluded", x->fn_body[kb], kb);
+    print_wrapped_kv(out, "peak fn over steps", line);
+    if (x->fn_onset[ko] > 0)
+        snprintf(line, sizeof line, "%.6g N (slot %d): the largest force while the damper term exceeded the "
+                 "elastic term just after a contact closed", x->fn_onset[ko], ko);
+    else
+        snprintf(line, sizeof line, "none (no contact closed with its damper term above its elastic term)");
+    print_wrapped_kv(out, "onset transient", line);
+    snprintf(line, sizeof line, "%.6g N (slot %d)", x->ft_max[kt], kt);
+    print_wrapped_kv(out, "peak |ft| over steps", line);
 }
 
 static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
@@ -215,10 +246,11 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
              nclosed ? ":" : "");
     print_wrapped_kv(out, "contacts", line);
     if (nclosed && mfn && mft) {
-        contact_table(out, r, mode, mfn, mft, nclosed);
-        snprintf(line, sizeof line, "normal %.6g N (slot %d), tangential %.6g N (slot %d), %s", mfn[kfn], kfn,
-                 mft[kft], kft, x ? "over every integrator step" : "at the samples");
-        print_wrapped_kv(out, "max force", line);
+        contact_table(out, r, mode, mfn, mft, x, nclosed);
+        snprintf(line, sizeof line, "%.6g N (slot %d), onset transients included; peak |ft| at samples %.6g N (slot %d)",
+                 mfn[kfn], kfn, mft[kft], kft);
+        print_wrapped_kv(out, "peak fn at samples", line);
+        if (x && x->fn_body && x->fn_onset) report_step_peaks(out, x, nslot);
     }
     free(mfn); free(mft); free(fn); free(ft); free(mode);
 }
@@ -265,7 +297,7 @@ static void report_capture_grasp(FILE *out, const cd_h5r *r, const char *verdict
     else snprintf(line, sizeof line, "%s", verdict);
     print_wrapped_kv(out, "capture", line);
     snprintf(line, sizeof line,
-             "peak contact force %.6g N, peak joint torque %.6g N m; at the end %lld contacts (%lld stick, "
+             "peak fn on the object at samples %.6g N, peak hand joint torque at samples %.6g N m; at the end %lld contacts (%lld stick, "
              "%lld slip), object offset from the palm (%.4g, %.4g, %.4g) m, grasp quality epsilon %.4g%s",
              pfn, ptau, nst + nsl, nst, nsl, off[0], off[1], off[2], eps, eps > 0 ? "" : " (no force closure)");
     print_wrapped_kv(out, "", line);

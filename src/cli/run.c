@@ -119,6 +119,30 @@ static void clear_progress(run_ctx *c)
     }
 }
 
+/* The onset transient of slot k (cli.h, docs/cli.md "Peak forces"): a law
+ * whose damper acts at zero penetration (the paper's linear law: f = D xdot
+ * at first touch) jumps at onset; the window from the contact's closing to
+ * the first step where the elastic term K x^p is at least the rest of the
+ * raw force (fnraw - K x^p: the damper) is the onset transient, its force
+ * kept apart from the body of the contact. A law without the jump (damper
+ * proportional to x^p xdot with D xdot < K) never enters the window. */
+static void onset_step(const cd_model *m, const cd_data *d, run_ctx *c, int k)
+{
+    const cd_contact_law *L = &m->law[m->slot_law[k]];
+    double fn = d->slot_fn[k], el;
+    if (d->slot_mode[k] == CD_MODE_OPEN || !(fn > 0)) {
+        c->onset[k] = 1; /* armed for the next closing */
+        return;
+    }
+    el = d->slot_x[k] > 0 ? L->K * pow(d->slot_x[k], L->p) : 0.0;
+    if (c->onset[k] && d->slot_fnraw[k] - el > el) {
+        if (fn > c->fn_onset[k]) c->fn_onset[k] = fn;
+        return;
+    }
+    c->onset[k] = 0;
+    if (fn > c->fn_body[k]) c->fn_body[k] = fn;
+}
+
 static int step_cb(const cd_model *m, cd_data *d, void *user)
 {
     run_ctx *c = (run_ctx *)user;
@@ -145,6 +169,7 @@ static int step_cb(const cd_model *m, cd_data *d, void *user)
         double a = sqrt(ft[0] * ft[0] + ft[1] * ft[1] + ft[2] * ft[2]);
         if (d->slot_fn[k] > c->fn_max[k]) c->fn_max[k] = d->slot_fn[k];
         if (a > c->ft_max[k]) c->ft_max[k] = a;
+        if (c->onset) onset_step(m, d, c, k);
     }
     if (c->progress) {
         if (now < 0) now = cli_wall();
@@ -352,7 +377,9 @@ void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_mer
     cd_error qerr;
     memset(cap, 0, sizeof *cap);
     cap->verdict = cd_verdict_name(mon->verdict);
-    cap->t = mon->verdict == CD_VERDICT_CAPTURED ? mon->t_capture : mon->verdict == CD_VERDICT_ESCAPED ? mon->t_escape : NAN;
+    cap->t = mon->verdict == CD_VERDICT_CAPTURED ? mon->t_capture
+             : mon->verdict == CD_VERDICT_ESCAPED ? mon->t_escape
+             : mon->verdict == CD_VERDICT_CAGED ? mon->t_cage : NAN;
     cap->peak_fn = mon->peak_fn;
     cap->peak_tau = mon->peak_tau;
     memcpy(cap->offset, mon->offset, sizeof cap->offset);
@@ -395,7 +422,10 @@ static int take_sample(sample_out *o, const cd_model *m, const cd_data *s)
     if (st != CD_OK) { o->wst = st; return 1; }
     if (o->mon) cd_monitor_update(o->mon, m, s);
     if (o->c->ctl && o->c->merit) cd_ctrl_merit_update(o->c->merit, o->c->ctl, m, s);
-    if (o->mon && o->c->until_verdict && o->mon->verdict != CD_VERDICT_UNRESOLVED) { /* capdyn sweep --until-verdict */
+    /* capdyn sweep --until-verdict: at a final verdict (a cage may still
+     * become a grip or let the object go) */
+    if (o->mon && o->c->until_verdict &&
+        (o->mon->verdict == CD_VERDICT_CAPTURED || o->mon->verdict == CD_VERDICT_ESCAPED)) {
         o->verdict_stop = 1;
         return 1;
     }
@@ -522,6 +552,8 @@ static void run_report(const run_opts *o, const char *out, const run_ctx *ctx, c
             x.wall = ctx->wall0;
             x.fn_max = ctx->fn_max;
             x.ft_max = ctx->ft_max;
+            x.fn_onset = ctx->fn_onset;
+            x.fn_body = ctx->fn_body;
             x.attitude = attitude;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
@@ -645,18 +677,25 @@ int cmd_run(int argc, char **argv)
     memset(&ctx, 0, sizeof ctx);
     ctx.fn_max = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
     ctx.ft_max = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.fn_onset = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.fn_body = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.onset = malloc((size_t)(m->nslot ? m->nslot : 1));
+    if (ctx.onset) memset(ctx.onset, 1, (size_t)(m->nslot ? m->nslot : 1));
     ctx.t_end = sc->duration;
     ctx.wall0 = cli_wall();
     ctx.last_draw = -1e300;
     ctx.progress = !o.quiet && isatty(STDERR_FILENO);
     ctx.max_wall = sc->max_wall_time;
     ctx.max_rhs = sc->max_rhs_evals;
-    if (!ctx.fn_max || !ctx.ft_max) {
+    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.onset) {
         cli_error("out of memory");
         cd_h5_close(w, m, d, CD_ENOMEM, "out of memory", NULL);
         restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
         free(ctx.fn_max);
         free(ctx.ft_max);
+        free(ctx.fn_onset);
+        free(ctx.fn_body);
+        free(ctx.onset);
         cd_data_free(d);
         cd_ctrl_free(ctl);
         cd_scenario_free(sc);
@@ -702,6 +741,9 @@ int cmd_run(int argc, char **argv)
     run_report(&o, out, &ctx, d, st, exitc, msg, wmsg, sc->control && sc->control->attitude);
     free(ctx.fn_max);
     free(ctx.ft_max);
+    free(ctx.fn_onset);
+    free(ctx.fn_body);
+    free(ctx.onset);
     cd_data_free(d);
     cd_ctrl_free(ctl);
     cd_scenario_free(sc);

@@ -49,13 +49,14 @@ void sw_clear(sw_progress *pg)
 void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, long ndone, long nfail, long nrun0,
                    double wall, int nj)
 {
-    long counts[3] = {0, 0, 0}, i, s, nslice = sw_region(p, res, o->length, NULL, NULL, NULL);
+    long counts[4] = {0, 0, 0, 0}, i, s, nslice = sw_region(p, res, o->length, NULL, NULL, NULL);
     for (i = 0; i < p->nvar; i++)
-        if (res[i].status == 0 && res[i].verdict >= 0 && res[i].verdict <= 2) counts[res[i].verdict]++;
+        if (res[i].status == 0 && res[i].verdict >= 0 && res[i].verdict <= 3) counts[res[i].verdict]++;
     printf("sweep: %ld of %ld variants run (%ld failed), %ld in %.2f s (%.3g variants/s, -j %d); captured %ld, "
-           "escaped %ld, unresolved %ld; summary '%s'\n",
+           "caged %ld, escaped %ld, unresolved %ld; summary '%s'\n",
            ndone, p->nvar, nfail, ndone - nrun0, wall, wall > 0 ? (double)(ndone - nrun0) / wall : 0.0, nj,
-           counts[CD_VERDICT_CAPTURED], counts[CD_VERDICT_ESCAPED], counts[CD_VERDICT_UNRESOLVED], o->output);
+           counts[CD_VERDICT_CAPTURED], counts[CD_VERDICT_CAGED], counts[CD_VERDICT_ESCAPED], counts[CD_VERDICT_UNRESOLVED],
+           o->output);
     if (nslice > 0) {
         double *area = malloc(sizeof(double) * (size_t)nslice);
         long *ncap = malloc(sizeof(long) * (size_t)nslice);
@@ -105,7 +106,7 @@ static void print_table(const sw_summary *s, const char *path, FILE *out)
     for (k = 0; k < nk; k++) fprintf(out, " %s", s->names[k]);
     for (k = 0; k < nk; k++) fprintf(out, " %s_norm", s->names[k]);
     fputs(" verdict status t_capture t_escape peak_fn peak_tau epsilon fn_step_max t_final\n", out);
-    fputs("# verdict: 0 unresolved, 1 captured, 2 escaped, -1 none; status: 0 ok, -1 not run, else failed\n", out);
+    fputs("# verdict: 0 unresolved, 1 captured, 2 escaped, 3 caged, -1 none; status: 0 ok, -1 not run, else failed\n", out);
     for (i = 0; i < n; i++) {
         const sw_result *r = &s->res[i];
         fprintf(out, "%ld", i);

@@ -25,6 +25,7 @@ const char *cd_verdict_name(cd_verdict v)
     switch (v) {
     case CD_VERDICT_CAPTURED: return "captured";
     case CD_VERDICT_ESCAPED: return "escaped";
+    case CD_VERDICT_CAGED: return "caged";
     default: return "unresolved";
     }
 }
@@ -295,7 +296,7 @@ cd_status cd_monitor_init(cd_monitor *mo, const cd_model *m, const cd_data *d, c
         mo->opt.workspace = 1.5 * (reach + arm > d0 ? reach + arm : d0);
     }
     mo->verdict = CD_VERDICT_UNRESOLVED;
-    mo->t_capture = mo->t_escape = NAN;
+    mo->t_capture = mo->t_escape = mo->t_cage = mo->epsilon = mo->t_judged = NAN;
     mo->t_set = d->t;
     mo->set_hash = 0;
     return CD_OK;
@@ -350,16 +351,33 @@ void cd_monitor_update(cd_monitor *mo, const cd_model *m, const cd_data *d)
     mo->enclosed = enclosed(m, d, &mo->opt, c);
     cd_v3_sub(t3, c, xp);
     cd_m3_tmulv(mo->point, Rp, t3);
-    if (mo->verdict != CD_VERDICT_UNRESOLVED) return;
+    if (mo->verdict == CD_VERDICT_CAPTURED || mo->verdict == CD_VERDICT_ESCAPED) return; /* final */
     if (mo->offset_norm > mo->opt.workspace) {
         mo->verdict = CD_VERDICT_ESCAPED;
         mo->t_escape = d->t;
         return;
     }
+    /* the capture conditions: enclosed, at rest relative to the palm, the
+     * fingers stopped, the contact set settled; then the grip is judged once
+     * per settled contact set (a new set restarts the dwell): force closure
+     * with epsilon > 0 is captured, anything less is caged (docs/capture.md,
+     * "Verdicts": an enclosure without closure holds the object only up to
+     * the play of the cage) */
     if (mo->enclosed && ncontact > 0 && mo->v_rel < mo->opt.v_max && mo->w_rel < mo->opt.w_max &&
-        mo->qd_max < mo->opt.w_max && d->t - mo->t_set >= mo->opt.dwell) {
-        mo->verdict = CD_VERDICT_CAPTURED;
-        mo->t_capture = d->t;
+        mo->qd_max < mo->opt.w_max && d->t - mo->t_set >= mo->opt.dwell && !(mo->t_judged == mo->t_set)) {
+        double eps = 0;
+        int closure = 0;
+        cd_error qerr;
+        mo->t_judged = mo->t_set;
+        if (cd_monitor_quality(mo, m, d, &eps, &closure, &qerr) != CD_OK) { eps = NAN; closure = 0; }
+        mo->epsilon = eps;
+        if (closure && eps > 0) {
+            mo->verdict = CD_VERDICT_CAPTURED;
+            mo->t_capture = d->t;
+        } else if (mo->verdict != CD_VERDICT_CAGED) {
+            mo->verdict = CD_VERDICT_CAGED;
+            mo->t_cage = d->t;
+        }
     }
 }
 
@@ -374,7 +392,8 @@ cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_d
     cd_grasp_contact ct[MAXC];
     cd_grasp_options op = cd_grasp_options_default();
     cd_grasp_quality q;
-    int k, n = 0, first[MAXF], nf = fingers(m, &mo->opt, first), f, parallel = nf >= 2, obj = mo->opt.object;
+    int k, n = 0, first[MAXF], nf = fingers(m, &mo->opt, first), f, parallel = nf >= 2, obj = mo->opt.object,
+        hand = mo->opt.hand;
     cd_status st;
     *eps = 0;
     *closure = 0;
@@ -382,9 +401,9 @@ cd_status cd_monitor_quality(const cd_monitor *mo, const cd_model *m, const cd_d
         int a = m->cp_body[m->slot_cp[k]], s = m->shape_body[m->slot_shape[k]], i;
         double sign;
         if (d->slot_mode[k] == CD_MODE_OPEN) continue;
-        if (m->body_sys[s] == obj) sign = -1.0;      /* the normal points from the object's shape out */
-        else if (m->body_sys[a] == obj) sign = 1.0;  /* the check point is the object's: into it */
-        else continue;
+        if (m->body_sys[s] == obj && m->body_sys[a] == hand) sign = -1.0; /* the normal points from the object's shape out */
+        else if (m->body_sys[a] == obj && m->body_sys[s] == hand) sign = 1.0; /* the check point is the object's: into it */
+        else continue; /* not the hand's grip (a fixture, another target) */
         for (i = 0; i < 3; i++) {
             ct[n].p[i] = d->slot_point[3 * k + i];
             ct[n].n[i] = sign * d->slot_normal[3 * k + i];

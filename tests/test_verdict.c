@@ -1,0 +1,136 @@
+/* The capture verdicts (include/capdyn/verdict.h, docs/grippers.md "Capture
+ * verdict", issue 22 item 3): captured needs force closure (epsilon > 0) of
+ * the hand's contacts when the capture conditions hold; the same conditions
+ * without it are "caged". Each case run through the loader, cd_sim_advance
+ * and the monitor at every sample, as `capdyn run` does. */
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include <capdyn/io.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+typedef struct {
+    cd_scenario *sc;
+    cd_data *d;
+    cd_monitor mon;
+} vrun;
+
+static void vrun_open(vrun *r, const char *path, const char *const *ov, int nov)
+{
+    cd_error err;
+    cd_monitor_opts mo;
+    memset(r, 0, sizeof *r);
+    r->sc = cd_scenario_load(path, ov, nov, &err);
+    cr_assert_not_null(r->sc, "%s", err.msg);
+    r->d = cd_data_create(r->sc->model, 0, &err);
+    cr_assert_not_null(r->d, "%s", err.msg);
+    mo = cd_scenario_monitor_opts(r->sc);
+    cr_assert_eq(cd_monitor_init(&r->mon, r->sc->model, r->d, &mo, &err), CD_OK, "%s", err.msg);
+    cd_monitor_update(&r->mon, r->sc->model, r->d);
+}
+
+static void vrun_to(vrun *r, double t_end)
+{
+    cd_error err;
+    double dt = r->sc->output_dt;
+    while (r->d->t < t_end - 1e-12) {
+        double tn = r->d->t + dt > t_end ? t_end : r->d->t + dt;
+        cr_assert_eq(cd_sim_advance(r->sc->model, r->d, tn, NULL, NULL, &err), CD_OK, "%s", err.msg);
+        cd_monitor_update(&r->mon, r->sc->model, r->d);
+    }
+}
+
+static void vrun_close(vrun *r)
+{
+    cd_data_free(r->d);
+    cd_scenario_free(r->sc);
+}
+
+/* the closed contacts of the object with the hand at the current state */
+static int hand_contacts(const vrun *r)
+{
+    const cd_model *m = r->sc->model;
+    int k, n = 0, obj = r->mon.opt.object, hand = r->mon.opt.hand;
+    for (k = 0; k < m->nslot; k++) {
+        int a = m->body_sys[m->cp_body[m->slot_cp[k]]], s = m->body_sys[m->shape_body[m->slot_shape[k]]];
+        if (r->d->slot_mode[k] == CD_MODE_OPEN) continue;
+        if ((a == obj && s == hand) || (a == hand && s == obj)) n++;
+    }
+    return n;
+}
+
+Test(verdict, codes_and_names_are_stable)
+{
+    /* other tools read the numbers (sweep summaries, Python, the FMU) */
+    cr_expect_eq(CD_VERDICT_UNRESOLVED, 0);
+    cr_expect_eq(CD_VERDICT_CAPTURED, 1);
+    cr_expect_eq(CD_VERDICT_ESCAPED, 2);
+    cr_expect_eq(CD_VERDICT_CAGED, 3);
+    cr_expect_str_eq(cd_verdict_name(CD_VERDICT_UNRESOLVED), "unresolved");
+    cr_expect_str_eq(cd_verdict_name(CD_VERDICT_CAPTURED), "captured");
+    cr_expect_str_eq(cd_verdict_name(CD_VERDICT_ESCAPED), "escaped");
+    cr_expect_str_eq(cd_verdict_name(CD_VERDICT_CAGED), "caged");
+}
+
+/* A genuine grasp stays captured: the Space Gripper on the convex rock
+ * (scenarios/space_gripper_irregular.toml) settles at 0.464 s with the
+ * contacts in force closure; the verdict, its time and epsilon > 0 at that
+ * moment, and no cage before it. */
+Test(verdict, a_genuine_grasp_stays_captured_with_force_closure, .timeout = 300)
+{
+    vrun r;
+    vrun_open(&r, "scenarios/space_gripper_irregular.toml", NULL, 0);
+    vrun_to(&r, 0.6);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAPTURED, "verdict %s (epsilon %g, t_cage %g)",
+                 cd_verdict_name(r.mon.verdict), r.mon.epsilon, r.mon.t_cage);
+    cr_expect(fabs(r.mon.t_capture - 0.464) < 1.5e-3, "t_capture %g, before the taxonomy 0.464 s", r.mon.t_capture);
+    cr_expect_gt(r.mon.epsilon, 0.0, "epsilon at the verdict %g", r.mon.epsilon);
+    cr_expect(isnan(r.mon.t_cage), "never caged: t_cage %g", r.mon.t_cage);
+    cr_expect_geq(hand_contacts(&r), 3, "held by %d contacts", hand_contacts(&r));
+    vrun_close(&r);
+}
+
+/* TAKO's fingertips meet the cylinder below its centre 2 cm beyond the tips
+ * and squeeze it out (scenarios/tako_off_centre.toml): escaped, a final
+ * verdict, at 0.471 s as before the taxonomy. */
+Test(verdict, a_squeezed_out_object_escapes, .timeout = 300)
+{
+    vrun r;
+    vrun_open(&r, "scenarios/tako_off_centre.toml", NULL, 0);
+    vrun_to(&r, 0.6);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_ESCAPED, "verdict %s", cd_verdict_name(r.mon.verdict));
+    cr_expect(fabs(r.mon.t_escape - 0.471) < 1.5e-3, "t_escape %g", r.mon.t_escape);
+    cr_expect(isnan(r.mon.t_capture), "t_capture %g", r.mon.t_capture);
+    vrun_close(&r);
+}
+
+/* A cage with contacts: the Space Gripper of Fig. 9 on its cylinder
+ * (scenarios/space_gripper_cylinder.toml) with frictionless contacts
+ * (contact.mu = mu_max = 0). The fingers wrap the cylinder and come to rest
+ * with 5 contacts sliding, but every frictionless normal on a circle passes
+ * through its axis: no contact can push against a torque about the axis, so
+ * the contacts are not in force closure (epsilon = 0, planar analysis) and
+ * the cylinder could turn freely in the hand. Before the taxonomy this was
+ * "captured at 0.547 s" with epsilon 0; now caged at that time, and still
+ * caged at the end (4 s): the contact set changes (a new judgement) but
+ * never closes. */
+Test(verdict, a_frictionless_wrap_is_caged_not_captured, .timeout = 300)
+{
+    static const char *const ov[] = {"contact.mu=0.0", "contact.mu_max=0.0"};
+    vrun r;
+    vrun_open(&r, "scenarios/space_gripper_cylinder.toml", ov, 2);
+    vrun_to(&r, 1.0);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g)", cd_verdict_name(r.mon.verdict),
+                 r.mon.epsilon);
+    cr_expect(fabs(r.mon.t_cage - 0.547) < 1.5e-3, "t_cage %g", r.mon.t_cage);
+    cr_expect_eq(r.mon.epsilon, 0.0, "epsilon at the judgement %g", r.mon.epsilon);
+    cr_expect(isnan(r.mon.t_capture), "t_capture %g", r.mon.t_capture);
+    cr_expect(r.mon.enclosed && hand_contacts(&r) >= 2, "enclosed %d, %d contacts with the hand", r.mon.enclosed,
+              hand_contacts(&r));
+    vrun_to(&r, r.sc->duration);
+    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "at the end: %s", cd_verdict_name(r.mon.verdict));
+    vrun_close(&r);
+}
