@@ -57,6 +57,8 @@ static const char *sweep_help =
     "  --shard K/N         run only the variants i with i mod N = K-1 (default:\n"
     "                      SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set)\n"
     "  --merge FILE...     join shard summaries of one sweep into -o FILE\n"
+    "  --plan              print each variant's values (tab-separated) and exit\n"
+    "                      without running anything\n"
     "  -j, --jobs N        worker processes (default: the online cores)\n"
     "  --resume            continue the sweep in FILE: run only what it lacks\n"
     "  --keep-runs DIR     also write each variant's results file DIR/variant_NNNNNN.h5\n"
@@ -161,6 +163,8 @@ static int parse(int argc, char **argv, sw_opts *o)
                     return cli_usage("sweep", "--length expects a positive length in metres, got '%s'", v ? v : "");
             } else if (!strcmp(a, "--until-verdict")) {
                 o->until_verdict = 1;
+            } else if (!strcmp(a, "--plan")) {
+                o->plan = 1;
             } else if (!strcmp(a, "--resume")) {
                 o->resume = 1;
             } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
@@ -419,6 +423,21 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     if (rc != 0 || s.o.table || s.o.merge) {
         free(s.o.sets);
         return rc;
+    }
+    if (s.o.plan) { /* the plan only: variant, then each key's value */
+        long i;
+        int k;
+        printf("variant");
+        for (k = 0; k < s.p.nkey; k++) printf("\t%s", s.p.key[k].key);
+        printf("\n");
+        for (i = 0; i < s.p.nvar; i++) {
+            printf("%ld", i);
+            for (k = 0; k < s.p.nkey; k++) printf("\t%s", s.p.val[i * s.p.nkey + k]);
+            printf("\n");
+        }
+        fflush(stdout);
+        sweep_free(&s);
+        return CLI_OK;
     }
     if (!s.o.output) default_output(&s);
 #ifdef CAPDYN_MPI

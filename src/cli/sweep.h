@@ -172,7 +172,7 @@ typedef struct {
     int nmerge;
     long lhs, jobs;
     unsigned long long seed;
-    int quiet, resume, have_jobs, until_verdict;
+    int quiet, resume, have_jobs, until_verdict, plan;
     double length;
 } sw_opts;
 

@@ -70,6 +70,21 @@ void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, lon
         free(ncap);
         free(lab);
     }
+    if (p->mc > 0) { /* the capture probability per grid cell */
+        sw_cell *cell = malloc(sizeof *cell * (size_t)(p->ncell + 1));
+        if (cell && sw_mc_cells(p, res, cell) == 0)
+            for (s = 0; s < p->ncell && s < 100; s++) {
+                int k;
+                printf("cell %ld", s);
+                for (k = 0; k < p->nvary; k++) printf(" %s=%s", p->key[k].key, p->val[s * p->mc * p->nkey + k]);
+                printf(": captured %ld of %ld, p = %.4f, Wilson 95 %% [%.4f, %.4f]", cell[s].ncap, cell[s].n, cell[s].p,
+                       cell[s].lo, cell[s].hi);
+                if (cell[s].ncap > 0) printf("; capture time mean %.4g s, median %.4g s", cell[s].t_mean, cell[s].t_p50);
+                printf("\n");
+            }
+        if (p->ncell > 100) printf("(%ld cells more in /mc of the summary)\n", p->ncell - 100);
+        free(cell);
+    }
     for (i = 0; i < p->nvar && nfail; i++)
         if (res[i].status != 0 && res[i].status != SW_NOT_RUN) printf("variant %ld failed: %s\n", i, res[i].reason);
 }
