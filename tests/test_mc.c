@@ -290,7 +290,7 @@ Test(mc, a_dispersed_duration_gives_the_analytic_capture_probability, .timeout =
     int i;
     make_tmpdir(dir, sizeof dir);
     scen(sc, sizeof sc, "tako_centred.toml");
-    cr_assert_eq(capdyn(dir, &out, &err, "run", sc, "--until-verdict", "-o", "nominal.h5", NULL), 0, "%s", err);
+    cr_assert_eq(capdyn(dir, &out, &err, "run", sc, "-o", "nominal.h5", NULL), 0, "%s", err);
     p = strstr(out, "captured at t = ");
     cr_assert_not_null(p, "%s", out);
     tc = strtod(p + strlen("captured at t = "), NULL);

@@ -240,8 +240,8 @@ void sw_wilson(long k, long n, double *lo, double *hi)
     d = 1 + z * z / (double)n;
     c = (p + z * z / (2.0 * (double)n)) / d;
     h = z * sqrt(p * (1 - p) / (double)n + z * z / (4.0 * (double)n * (double)n)) / d;
-    *lo = c - h < 0 ? 0 : c - h;
-    *hi = c + h > 1 ? 1 : c + h;
+    *lo = k == 0 || c - h < 0 ? 0 : c - h; /* exact ends: 0 of n, n of n */
+    *hi = k == n || c + h > 1 ? 1 : c + h;
 }
 
 /* mean and 10/50/90 % quantiles (GSL, linear interpolation) of v[n]

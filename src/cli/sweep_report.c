@@ -103,6 +103,41 @@ static void put_word(FILE *out, const char *v)
     for (i = 0; i < n; i++) fputc(v[i] == ' ' || v[i] == '\t' ? '_' : v[i], out);
 }
 
+/* A Monte Carlo summary's table: one row per grid cell (the variants are
+ * cell-major), the --vary values, then the counts and the probability. */
+static void print_cells(const sw_summary *s, const char *path, FILE *out)
+{
+    sw_plan p;
+    sw_cell *cell;
+    long c, k;
+    memset(&p, 0, sizeof p);
+    p.mc = (long)s->mc;
+    p.nvar = (long)s->nvar;
+    p.ncell = p.nvar / p.mc;
+    cell = malloc(sizeof *cell * (size_t)(p.ncell + 1));
+    if (!cell || sw_mc_cells(&p, s->res, cell) != 0) {
+        free(cell);
+        fputs("# out of memory\n", out);
+        return;
+    }
+    fprintf(out, "# capdyn sweep summary '%s': %ld cells x %lld draws (Monte Carlo)\n", path, p.ncell, s->mc);
+    fputs("# cell", out);
+    for (k = 0; k < s->nvary; k++) fprintf(out, " %s", s->names[k]);
+    fputs(" n n_captured n_caged n_failed p_capture p_low p_high t_capture_mean peak_fn_mean epsilon_mean\n", out);
+    fputs("# p_low, p_high: Wilson 95 %; n_caged: verdict code 3; NaN: no value\n", out);
+    for (c = 0; c < p.ncell; c++) {
+        const sw_cell *C = &cell[c];
+        fprintf(out, "%ld", c);
+        for (k = 0; k < s->nvary; k++) {
+            fputc(' ', out);
+            put_word(out, s->vals[c * p.mc * s->nkey + k]);
+        }
+        fprintf(out, " %ld %ld %ld %ld %.17g %.17g %.17g %.17g %.17g %.17g\n", C->n, C->ncap, C->nverdict[3], C->nfail,
+                C->p, C->lo, C->hi, C->t_mean, C->f_mean, C->e_mean);
+    }
+    free(cell);
+}
+
 static void print_table(const sw_summary *s, const char *path, FILE *out)
 {
     long i, k, n = (long)s->nvar, nk = s->nkey;
@@ -156,7 +191,8 @@ static int table_child(void *arg)
         cli_error("%s", msg);
         return CLI_FAIL;
     }
-    print_table(&s, path, stdout);
+    if (s.mc > 0 && s.nvar % s.mc == 0) print_cells(&s, path, stdout);
+    else print_table(&s, path, stdout);
     sw_summary_free(&s);
     return CLI_OK;
 }
