@@ -5,6 +5,8 @@
  *   sweep_run.c     running the variants: worker processes, MPI ranks
  *   sweep_h5.c      the summary file: writing (with its lock), reading
  *   sweep_report.c  what is printed: progress bar, end report, --table
+ *   sweep_mc.c      --mc: the dispersions, each variant's draws, per-cell probability
+ *   sweep_merge.c   --merge: shard summaries joined into one
  * Internal to src/cli. */
 #ifndef CD_CLI_SWEEP_H
 #define CD_CLI_SWEEP_H
