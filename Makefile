@@ -175,7 +175,8 @@ TEST_LONG_LIST = \
   gripper/a_target_in_the_palm_frame_is_the_same_grasp_wherever_the_hand_is \
   gripper/verdicts_captured_escaped_unresolved \
   sweep/tako_vs_space_region_on_a_coarse_grid \
-  sweep/a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages
+  sweep/a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages \
+  mc/a_dispersed_duration_gives_the_analytic_capture_probability
 tl_empty :=
 tl_space := $(tl_empty) $(tl_empty)
 TEST_LONG = @($(subst $(tl_space),|,$(strip $(TEST_LONG_LIST))))

@@ -18,6 +18,12 @@
 #   CAPMAP_RATE      tumbling rates about the target's x, A:B:N [deg/s] (0:8:5)
 #   CAPMAP_DURATION  simulation.duration of each variant [s] (8)
 #   SWEEP_ARGS       extra capdyn sweep options (default "-j 1")
+#   CAPMAP_MC        N > 0: N Monte Carlo draws per cell of CAPMAP_DISPERSE; the
+#                    map is then the capture probability and its Wilson 95 %
+#                    interval (capture_map_mc.png/.svg, data/capture_map_mc.*)
+#   CAPMAP_DISPERSE  the dispersion of each draw (default: the target's principal
+#                    moments 5 %, 'target.target.inertia=inertia(116,137,154,0.05)')
+#   CAPMAP_SEED      the draws' seed (default 1)
 set -euo pipefail
 cd "$(dirname "$0")/.."
 CAPDYN=${CAPDYN:-build/capdyn}
@@ -31,6 +37,21 @@ read -r -a SWEEP_EXTRA <<< "${SWEEP_ARGS:--j 1}"
 command -v gnuplot > /dev/null || { echo "capture_map.sh: gnuplot not found; run 'make deps'" >&2; exit 1; }
 mkdir -p "$D"
 sc=scenarios/capture_handrail_tumbling.toml
+MC=${CAPMAP_MC:-0}
+if [ "$MC" != 0 ]; then
+    DISP=${CAPMAP_DISPERSE:-target.target.inertia=inertia(116,137,154,0.05)}
+    echo "== capture_map: capdyn sweep $sc --mc $MC --disperse $DISP (aim $AIM m, rate $RATE deg/s, duration $DUR s)"
+    "$CAPDYN" sweep "$sc" --vary "control.misalign.position[0]=$AIM" --vary "target.target.angular_velocity_deg_s[0]=$RATE" \
+        --mc "$MC" --disperse "$DISP" --seed "${CAPMAP_SEED:-1}" --set "simulation.duration=$DUR" --until-verdict -q \
+        -o "$D/capture_map_mc.h5" ${SWEEP_EXTRA[@]+"${SWEEP_EXTRA[@]}"}
+    "$CAPDYN" sweep --table "$D/capture_map_mc.h5" > "$D/capture_map_mc.dat"
+    for ext in png svg; do
+        gnuplot -c plots/capture_map.gp "$D/capture_map_mc.dat" "$OUT/capture_map_mc.$ext" \
+            "Capture probability of a tumbling target by its handrail: aim error x tumbling rate, $MC draws per cell" mc
+    done
+    echo "   $OUT/capture_map_mc.png $OUT/capture_map_mc.svg ($D/capture_map_mc.dat)"
+    exit 0
+fi
 echo "== capture_map: capdyn sweep $sc (aim $AIM m, rate $RATE deg/s, duration $DUR s)"
 "$CAPDYN" sweep "$sc" --vary "control.misalign.position[0]=$AIM" --vary "target.target.angular_velocity_deg_s[0]=$RATE" \
     --set "simulation.duration=$DUR" --until-verdict -q -o "$D/capture_map.h5" ${SWEEP_EXTRA[@]+"${SWEEP_EXTRA[@]}"}

@@ -36,8 +36,21 @@ ny = nvar / nx
 dx = nx > 1 ? (nx_hi - nx_lo) / (nx - 1) / L : 0.01
 dy = ny > 1 ? (ny_hi - ny_lo) / (ny - 1) / L : 0.01
 
-# verdict colours: captured green, escaped red, caged blue, unresolved amber, failed black
+# verdict colours: captured green, escaped red, unresolved amber, caged
+# (verdict code 3: held but not captured) blue, failed black
 vcol(v, s) = (s != 0) ? 0x000000 : (v == 1) ? 0x2ca02c : (v == 2) ? 0xd62728 : (v == 3) ? 0x1f77b4 : 0xffbf00
+
+# readable ticks: about 4 per axis at round steps of x / L and y / L, and
+# the bottom margin kept for the legend line below the x label
+nice(r) = (m = 10 ** floor(log10(r / 4)), f = r / 4 / m, (f < 1.5 ? 1 : f < 3.5 ? 2 : f < 7.5 ? 5 : 10) * m)
+# the plotted range: the cells and the hand's outline
+stats outline using ($1 / L) nooutput
+xr = ((STATS_max > nx_hi / L ? STATS_max : nx_hi / L) - (STATS_min < nx_lo / L ? STATS_min : nx_lo / L)) + dx
+stats outline using ($2 / L) nooutput
+yr = ((STATS_max > ny_hi / L ? STATS_max : ny_hi / L) - (STATS_min < ny_lo / L ? STATS_min : ny_lo / L)) + dy
+set xtics nice(xr) nomirror out
+set ytics nice(yr) nomirror out
+set bmargin 6
 
 set size ratio -1
 set xlabel "x / L (L = total finger length)"
@@ -46,7 +59,7 @@ set multiplot layout 1, 2 title ttl noenhanced
 set key off
 if (metric eq "verdict") {
     unset colorbox
-    set label 1 "green captured, red escaped, amber unresolved, black failed" at screen 0.5, 0.04 center
+    set label 1 "green captured, red escaped, amber unresolved, blue caged, black failed" at screen 0.5, 0.025 center
 } else {
     set colorbox
     set palette rgbformulae 33,13,10
@@ -54,6 +67,14 @@ if (metric eq "verdict") {
     if (metric eq "t_capture") { set cblabel "time to capture [s] (blank: not captured)" }
 }
 col = (metric eq "peak_fn") ? 10 : 8
+# one colour scale for both panels (the same quantity): the range over both
+if (metric ne "verdict") {
+    stats fa using ($7 == 0 && (col == 10 || $6 == 1) ? column(col) : 1 / 0) nooutput
+    c_lo = STATS_min; c_hi = STATS_max
+    stats fb using ($7 == 0 && (col == 10 || $6 == 1) ? column(col) : 1 / 0) nooutput
+    c_lo = (STATS_min < c_lo) ? STATS_min : c_lo; c_hi = (STATS_max > c_hi) ? STATS_max : c_hi
+    set cbrange [c_lo : c_hi]
+}
 
 do for [p = 1:2] {
     f = (p == 1) ? fa : fb

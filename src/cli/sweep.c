@@ -22,6 +22,8 @@
 
 static const char *sweep_help =
     "usage: capdyn sweep SCENARIO.toml --vary KEY=SPEC [--vary KEY=SPEC ...] [options]\n"
+    "       capdyn sweep SCENARIO.toml [--vary KEY=SPEC ...] --mc N --disperse KEY=DIST ... [options]\n"
+    "       capdyn sweep --merge SHARD.h5 SHARD.h5 ... -o MERGED.h5\n"
     "       capdyn sweep --table SUMMARY.h5\n"
     "\n"
     "Runs one variant of the scenario per point of a grid (default) or of a Latin\n"
@@ -34,12 +36,29 @@ static const char *sweep_help =
     "       V1,V2,...     a list of TOML values (\"tako\",\"space\" needs the quotes\n"
     "                     escaped for the shell; bare words are strings)\n"
     "\n"
+    "DIST:  normal(MEAN,SD[,LO,HI])  truncated to [LO, HI] if given\n"
+    "       uniform(LO,HI)\n"
+    "       cone(X,Y,Z,DEG)          a vector of that length, its direction uniform\n"
+    "                                within DEG of (X,Y,Z)\n"
+    "       rotation(W,X,Y,Z,DEG)    the quaternion turned by up to DEG about a\n"
+    "                                uniform axis\n"
+    "       inertia(A,B,C,REL_SD)    principal moments, each normal(I, REL_SD I),\n"
+    "                                redrawn until positive and A+B>=C, B+C>=A, A+C>=B\n"
+    "\n"
     "options:\n"
     "  -o, --output FILE   the summary (default: the scenario's base name with\n"
     "                      _sweep.h5); written under a temporary name, renamed\n"
     "  --set KEY=VALUE     an override of every variant (before the swept keys)\n"
     "  --lhs N             N variants of a Latin hypercube instead of the grid\n"
-    "  --seed S            the hypercube's seed (default 1)\n"
+    "  --seed S            the hypercube's and the draws' seed (default 1)\n"
+    "  --mc N              N Monte Carlo draws of the --disperse keys per grid cell\n"
+    "                      (GSL mt19937; variant i's stream seeded from (S, i))\n"
+    "  --disperse KEY=DIST a dispersed key (up to 8), a new value per variant\n"
+    "  --shard K/N         run only the variants i with i mod N = K-1 (default:\n"
+    "                      SLURM_ARRAY_TASK_ID/SLURM_ARRAY_TASK_COUNT when set)\n"
+    "  --merge FILE...     join shard summaries of one sweep into -o FILE\n"
+    "  --plan              print each variant's values (tab-separated) and exit\n"
+    "                      without running anything\n"
     "  -j, --jobs N        worker processes (default: the online cores)\n"
     "  --resume            continue the sweep in FILE: run only what it lacks\n"
     "  --keep-runs DIR     also write each variant's results file DIR/variant_NNNNNN.h5\n"
@@ -58,6 +77,18 @@ static const char *sweep_help =
     "(failed ones included), 1 on an error, 2 on a bad command line.\n";
 
 /* ---- the command line ------------------------------------------------------ */
+
+/* K/N, 1 <= K <= N; 0 or -1 */
+static int parse_shard(const char *v, long *k, long *n)
+{
+    const char *sl = strchr(v, '/');
+    char a[32];
+    if (!sl || (size_t)(sl - v) >= sizeof a) return -1;
+    memcpy(a, v, (size_t)(sl - v));
+    a[sl - v] = 0;
+    if (cli_count(a, k) || cli_count(sl + 1, n) || *n < 1 || *k < 1 || *k > *n) return -1;
+    return 0;
+}
 
 static int parse(int argc, char **argv, sw_opts *o)
 {
@@ -82,9 +113,27 @@ static int parse(int argc, char **argv, sw_opts *o)
                 if (!(v = VAL(a)) || !strchr(v, '=') || v[0] == '=')
                     return cli_usage("sweep", "--set expects KEY=VALUE, got '%s'", v ? v : "");
                 o->sets[o->nsets++] = v;
+            } else if (!strcmp(a, "--mc")) {
+                if (!(v = VAL(a)) || cli_count(v, &o->mc) || o->mc < 1 || o->mc > SW_MAX_VARIANTS)
+                    return cli_usage("sweep", "--mc expects a number of draws from 1 to %ld, got '%s'", SW_MAX_VARIANTS,
+                                     v ? v : "");
+            } else if (!strcmp(a, "--disperse")) {
+                if (!(v = VAL(a))) return cli_usage("sweep", "--disperse needs KEY=DIST");
+                if (o->ndisp == SW_MAX_DISP) return cli_usage("sweep", "at most %d --disperse keys", SW_MAX_DISP);
+                o->disp[o->ndisp++] = v;
+            } else if (!strcmp(a, "--shard")) {
+                if (!(v = VAL(a)) || parse_shard(v, &o->shard_k, &o->shard_n) != 0)
+                    return cli_usage("sweep", "--shard expects K/N with 1 <= K <= N, got '%s'", v ? v : "");
+            } else if (!strcmp(a, "--merge")) {
+                o->merge = (const char **)&argv[i + 1];
+                while (i + 1 < argc && argv[i + 1][0] != '-') {
+                    i++;
+                    o->nmerge++;
+                }
+                if (o->nmerge == 0) return cli_usage("sweep", "--merge needs the shard summaries");
             } else if (!strcmp(a, "--vary")) {
                 if (!(v = VAL(a))) return cli_usage("sweep", "--vary needs KEY=SPEC");
-                if (o->nvary == SW_MAX_KEYS) return cli_usage("sweep", "at most %d --vary keys", SW_MAX_KEYS);
+                if (o->nvary == SW_MAX_VARY) return cli_usage("sweep", "at most %d --vary keys", SW_MAX_VARY);
                 o->vary[o->nvary++] = v;
             } else if (!strcmp(a, "-o") || !strcmp(a, "--output")) {
                 if (!(v = VAL(a)) || !*v) return cli_usage("sweep", "%s needs a file name", a);
@@ -114,6 +163,8 @@ static int parse(int argc, char **argv, sw_opts *o)
                     return cli_usage("sweep", "--length expects a positive length in metres, got '%s'", v ? v : "");
             } else if (!strcmp(a, "--until-verdict")) {
                 o->until_verdict = 1;
+            } else if (!strcmp(a, "--plan")) {
+                o->plan = 1;
             } else if (!strcmp(a, "--resume")) {
                 o->resume = 1;
             } else if (!strcmp(a, "-q") || !strcmp(a, "--quiet")) {
@@ -127,8 +178,30 @@ static int parse(int argc, char **argv, sw_opts *o)
     }
 #undef VAL
     if (o->table) return 0;
+    if (o->merge) {
+        if (o->scenario) return cli_usage("sweep", "--merge takes summaries, not a scenario ('%s')", o->scenario);
+        if (!o->output) return cli_usage("sweep", "--merge needs -o MERGED.h5");
+        return 0;
+    }
     if (!o->scenario) return cli_usage("sweep", "missing the scenario file");
-    if (o->nvary == 0) return cli_usage("sweep", "nothing to vary: give 1 to %d --vary KEY=SPEC", SW_MAX_KEYS);
+    if (o->mc && !o->ndisp) return cli_usage("sweep", "--mc needs at least one --disperse KEY=DIST");
+    if (o->ndisp && !o->mc) return cli_usage("sweep", "--disperse needs --mc N (draws per cell)");
+    if (o->mc && o->lhs) return cli_usage("sweep", "--mc combines with a grid, not with --lhs");
+    if (o->nvary == 0 && !o->mc)
+        return cli_usage("sweep", "nothing to vary: give 1 to %d --vary KEY=SPEC or --mc N", SW_MAX_VARY);
+    if (!o->shard_n) { /* a Slurm job array */
+        const char *id = getenv("SLURM_ARRAY_TASK_ID"), *cnt = getenv("SLURM_ARRAY_TASK_COUNT");
+        long k, n;
+        if (id && cnt && *id && *cnt) {
+            if (cli_count(id, &k) || cli_count(cnt, &n) || n < 1 || k >= n)
+                return cli_usage("sweep",
+                                 "SLURM_ARRAY_TASK_ID=%s, SLURM_ARRAY_TASK_COUNT=%s: expected 0 <= ID < COUNT "
+                                 "(an array --array=0-(N-1))",
+                                 id, cnt);
+            o->shard_k = k + 1;
+            o->shard_n = n;
+        }
+    }
     return 0;
 }
 
@@ -344,11 +417,27 @@ static int sweep_main(int argc, char **argv, int rank, int size)
     s.cx.out = &s.out;
     rc = parse_quiet(argc, argv, &s.o, rank);
     if (rc == 0 && s.o.table) rc = sw_summary_table(s.o.table);
-    else if (rc == 0) rc = sw_plan_make(&s.p, s.o.vary, s.o.nvary, s.o.lhs, s.o.seed);
+    else if (rc == 0 && s.o.merge) rc = sw_merge(&s.o);
+    else if (rc == 0) rc = sw_plan_make_mc(&s.p, s.o.vary, s.o.nvary, s.o.lhs, s.o.seed, s.o.disp, s.o.ndisp, s.o.mc);
     else if (rc < 0) rc = CLI_OK; /* --help */
-    if (rc != 0 || s.o.table) {
+    if (rc != 0 || s.o.table || s.o.merge) {
         free(s.o.sets);
         return rc;
+    }
+    if (s.o.plan) { /* the plan only: variant, then each key's value */
+        long i;
+        int k;
+        printf("variant");
+        for (k = 0; k < s.p.nkey; k++) printf("\t%s", s.p.key[k].key);
+        printf("\n");
+        for (i = 0; i < s.p.nvar; i++) {
+            printf("%ld", i);
+            for (k = 0; k < s.p.nkey; k++) printf("\t%s", s.p.val[i * s.p.nkey + k]);
+            printf("\n");
+        }
+        fflush(stdout);
+        sweep_free(&s);
+        return CLI_OK;
     }
     if (!s.o.output) default_output(&s);
 #ifdef CAPDYN_MPI

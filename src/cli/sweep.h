@@ -5,6 +5,8 @@
  *   sweep_run.c     running the variants: worker processes, MPI ranks
  *   sweep_h5.c      the summary file: writing (with its lock), reading
  *   sweep_report.c  what is printed: progress bar, end report, --table
+ *   sweep_mc.c      --mc: the dispersions, each variant's draws, per-cell probability
+ *   sweep_merge.c   --merge: shard summaries joined into one
  * Internal to src/cli. */
 #ifndef CD_CLI_SWEEP_H
 #define CD_CLI_SWEEP_H
@@ -13,7 +15,9 @@
 
 #include <signal.h>
 
-#define SW_MAX_KEYS 4
+#define SW_MAX_VARY 4   /* --vary keys */
+#define SW_MAX_DISP 8   /* --disperse keys */
+#define SW_MAX_KEYS (SW_MAX_VARY + SW_MAX_DISP)
 #define SW_MAX_JOBS 1024
 /* Seconds of wall time between two summary checkpoints: a sweep killed
  * without a chance to write (SIGKILL, power) loses at most this much work. */
@@ -36,7 +40,13 @@ typedef struct {
     long n;           /* range: number of grid values */
     char **vals;      /* the list, or the range's grid values (nval) */
     long nval;
+    int dist;         /* a dispersed key (--disperse): SW_DIST_*, 0 a --vary key */
+    double prm[8];    /* the distribution's parameters (sweep_mc.c) */
+    int nprm;
 } sw_key;
+
+/* Distributions of a dispersed key (docs/sweep.md, "Monte Carlo"). */
+enum { SW_DIST_NONE, SW_DIST_NORMAL, SW_DIST_UNIFORM, SW_DIST_CONE, SW_DIST_ROTATION, SW_DIST_INERTIA };
 
 /* The variants of a sweep: val[i * nkey + k] is key k's TOML value in
  * variant i (owned). */
@@ -48,6 +58,9 @@ typedef struct {
     unsigned long long seed;
     long nvar;
     char **val;
+    long mc;                  /* draws per grid cell (--mc), 0 none */
+    long ncell;               /* grid cells (nvar = ncell * mc under --mc) */
+    int nvary;                /* the first nvary keys are --vary keys, the rest dispersed */
 } sw_plan;
 
 /* One variant's outcome; fixed size (it crosses a pipe or an MPI message). */
@@ -120,6 +133,7 @@ typedef struct {
     long long *captured;
     long long jobs;
     double total_wall;
+    long long mc, nvary;      /* /mc: draws per cell, --vary keys (no /mc: 0, nkey) */
 } sw_summary;
 
 /* Reads a summary (every size checked against the file before anything is
@@ -150,11 +164,17 @@ typedef struct {
     const char *scenario, *output, *keep_dir, *table;
     const char **sets;
     int nsets;
-    const char *vary[SW_MAX_KEYS + 1];
+    const char *vary[SW_MAX_VARY + 1];
     int nvary;
+    const char *disp[SW_MAX_DISP + 1];
+    int ndisp;
+    long mc;
+    long shard_k, shard_n;    /* --shard K/N (1-based K), 0: all */
+    const char **merge;       /* --merge files */
+    int nmerge;
     long lhs, jobs;
     unsigned long long seed;
-    int quiet, resume, have_jobs, until_verdict;
+    int quiet, resume, have_jobs, until_verdict, plan;
     double length;
 } sw_opts;
 
@@ -170,12 +190,44 @@ typedef struct {
  * hypercube of lhs variants with seed: p filled (free with sw_plan_free).
  * CLI_OK, or the exit status after one error line (usage: CLI_USAGE). */
 int sw_plan_make(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed);
+/* The same with --mc draws per cell of the dispersed keys disp (ndisp). */
+int sw_plan_make_mc(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed,
+                    const char *const *disp, int ndisp, long mc);
+
+/* ---- sweep_mc.c ---- */
+/* KEY=DIST (normal(m,sd[,lo,hi]), uniform(lo,hi), cone(x,y,z,deg),
+ * rotation(w,x,y,z,deg), inertia(a,b,c,rel_sd)) into k. 0, or -1 with msg. */
+int sw_disp_parse(sw_key *k, const char *arg, char *msg, size_t len);
+/* The values of the dispersed keys of variant idx: one GSL mt19937 stream
+ * seeded from (seed, idx) alone, the keys drawn in order; out[k] (TOML
+ * text, malloc'd) for each dispersed key. 0, or -1 (out of memory). */
+int sw_disp_draw(const sw_key *key, int nkey, unsigned long long seed, long idx, char **out);
+/* One value of key k from the generator r (void * = gsl_rng *) as TOML text
+ * into buf, its numbers into x (up to 4). */
+void sw_disp_one(const sw_key *k, void *r, char *buf, size_t len, double *x);
+/* Wilson score interval of k successes in n at 95 % (z = 1.959964). */
+void sw_wilson(long k, long n, double *lo, double *hi);
+/* Per-cell statistics of a Monte Carlo sweep (n cells). */
+typedef struct {
+    long n, ncap, nfail, nverdict[8];
+    double p, lo, hi;
+    double t_mean, t_p10, t_p50, t_p90;      /* capture time [s] of the captured */
+    double f_mean, f_p10, f_p50, f_p90;      /* peak normal force [N] */
+    double e_mean, e_p10, e_p50, e_p90;      /* epsilon */
+} sw_cell;
+/* Fills cell[ncell]; 0 or -1 (out of memory). */
+int sw_mc_cells(const sw_plan *p, const sw_result *res, sw_cell *cell);
 void sw_plan_free(sw_plan *p);
 /* The --set list of variant idx: the nsets base overrides, then KEY=VALUE
  * of each swept key; NULL-terminated, malloc'd (sw_overrides_free). NULL
  * if out of memory. */
 char **sw_overrides(const char *const *sets, int nsets, const sw_plan *p, long idx);
 void sw_overrides_free(char **ov);
+
+/* capdyn sweep --merge (sweep_h5.c): an exit status. */
+int sw_merge(const sw_opts *o);
+/* Is variant i this process's to run (its shard; status not yet run)? */
+int sw_todo(const sw_ctx *cx, const sw_result *res, long i);
 
 /* ---- sweep_run.c ---- */
 /* Runs variant idx in this process into r (its failure recorded in r). */

@@ -231,6 +231,60 @@ static int write_region(hid_t f, const sw_meta *meta, const sw_plan *p, const sw
     return rc;
 }
 
+/* /mc: the draws per cell, the number of --vary keys, and per grid cell
+ * (C order of the --vary keys) the capture probability, its Wilson 95 %
+ * interval and the figures of merit's mean and 10/50/90 % quantiles. */
+static int write_mc(hid_t f, const sw_plan *p, const sw_result *res)
+{
+    long nc = p->ncell, c;
+    int rc = 0, q;
+    sw_cell *cell = malloc(sizeof *cell * (size_t)(nc + 1));
+    double *d = malloc(sizeof(double) * (size_t)(nc + 1));
+    long long *l = malloc(sizeof(long long) * (size_t)(nc + 1) * 8);
+    hid_t g;
+    static const struct {
+        const char *name, *units;
+        size_t off;
+    } dc[] = {
+        {"p_capture", NULL, offsetof(sw_cell, p)},       {"p_low", NULL, offsetof(sw_cell, lo)},
+        {"p_high", NULL, offsetof(sw_cell, hi)},         {"t_capture_mean", "s", offsetof(sw_cell, t_mean)},
+        {"t_capture_p10", "s", offsetof(sw_cell, t_p10)}, {"t_capture_p50", "s", offsetof(sw_cell, t_p50)},
+        {"t_capture_p90", "s", offsetof(sw_cell, t_p90)}, {"peak_fn_mean", "N", offsetof(sw_cell, f_mean)},
+        {"peak_fn_p10", "N", offsetof(sw_cell, f_p10)},   {"peak_fn_p50", "N", offsetof(sw_cell, f_p50)},
+        {"peak_fn_p90", "N", offsetof(sw_cell, f_p90)},   {"epsilon_mean", NULL, offsetof(sw_cell, e_mean)},
+        {"epsilon_p10", NULL, offsetof(sw_cell, e_p10)},  {"epsilon_p50", NULL, offsetof(sw_cell, e_p50)},
+        {"epsilon_p90", NULL, offsetof(sw_cell, e_p90)},
+    };
+    if (!cell || !d || !l || sw_mc_cells(p, res, cell) != 0 || (g = group(f, "mc")) < 0) {
+        free(cell);
+        free(d);
+        free(l);
+        return -1;
+    }
+    rc |= attr_l(g, "draws_per_cell", p->mc, NULL);
+    rc |= attr_l(g, "n_vary", p->nvary, NULL);
+    rc |= attr_l(g, "n_cells", nc, NULL);
+    rc |= attr_str(g, "generator", "gsl_rng_mt19937, seeded per variant from (seed, index) by splitmix64", NULL);
+    for (c = 0; c < nc; c++) l[c] = cell[c].n;
+    rc |= dset(g, "n", H5T_NATIVE_LLONG, H5T_STD_I64LE, nc, 0, l, NULL, NULL);
+    for (c = 0; c < nc; c++) l[c] = cell[c].ncap;
+    rc |= dset(g, "n_captured", H5T_NATIVE_LLONG, H5T_STD_I64LE, nc, 0, l, NULL, NULL);
+    for (c = 0; c < nc; c++) l[c] = cell[c].nfail;
+    rc |= dset(g, "n_failed", H5T_NATIVE_LLONG, H5T_STD_I64LE, nc, 0, l, NULL, NULL);
+    for (c = 0; c < nc; c++)
+        for (q = 0; q < 8; q++) l[c * 8 + q] = cell[c].nverdict[q];
+    rc |= dset(g, "n_verdict", H5T_NATIVE_LLONG, H5T_STD_I64LE, nc, 8, l, NULL, NULL);
+    for (q = 0; q < (int)(sizeof dc / sizeof dc[0]); q++) {
+        for (c = 0; c < nc; c++) d[c] = *(const double *)((const char *)&cell[c] + dc[q].off);
+        rc |= dset(g, dc[q].name, H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE, nc, 0, d, dc[q].units, NULL);
+    }
+    H5Gclose(g);
+    free(cell);
+    free(d);
+    free(l);
+    return rc;
+}
+
 /* Everything but the file's creation; 0, -1 (an HDF5 call failed: disk
  * full, quota, file size limit, I/O) or -2 (out of memory). */
 static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_result *res, int jobs,
@@ -307,6 +361,9 @@ static int write_body(hid_t f, const sw_meta *meta, const sw_plan *p, const sw_r
 
     /* the graspable region of each slice of a grid over two ranges */
     rc |= write_region(f, meta, p, res, &h);
+    /* a Monte Carlo sweep's per-cell probabilities (derived from the rows
+     * above, outside the checksum) */
+    if (p->mc > 0) rc |= write_mc(f, p, res);
 
     /* what differs between runs of the same sweep */
     g = group(f, "timing");
@@ -830,6 +887,16 @@ static int load_body(hid_t f, const char *path, sw_summary *s, char *msg, size_t
             BAD("'%s': the region of the summary is damaged", path);
         }
         H5Gclose(g);
+    }
+    s->mc = 0;
+    s->nvary = s->nkey;
+    H5E_BEGIN_TRY { g = H5Gopen2(f, "mc", H5P_DEFAULT); } H5E_END_TRY;
+    if (g >= 0) {
+        int bad_mc = read_attr_num(g, "draws_per_cell", H5T_NATIVE_LLONG, &s->mc) ||
+                     read_attr_num(g, "n_vary", H5T_NATIVE_LLONG, &s->nvary) || s->mc < 1 || s->nvary < 0 ||
+                     s->nvary > s->nkey;
+        H5Gclose(g);
+        if (bad_mc) BAD("'%s': the group /mc of the summary is damaged", path);
     }
     H5E_BEGIN_TRY { g = H5Gopen2(f, "timing", H5P_DEFAULT); } H5E_END_TRY;
     if (g < 0) BAD("'%s': the group /timing is missing (damaged file)", path);

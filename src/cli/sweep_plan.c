@@ -155,31 +155,38 @@ static int make_plan(sw_plan *p, char *msg, size_t len)
     long i;
     int k;
     char buf[64];
+    int nv_ = p->nvary;
     if (!p->lhs) {
         /* the size first: no key's values are made for a grid too large */
         double nv = 1;
-        for (k = 0; k < p->nkey; k++) nv *= (double)(p->key[k].is_range ? p->key[k].n : p->key[k].nval);
+        for (k = 0; k < nv_; k++) nv *= (double)(p->key[k].is_range ? p->key[k].n : p->key[k].nval);
+        p->ncell = (long)nv;
+        if (p->mc > 0) nv *= (double)p->mc;
         if (nv > (double)SW_MAX_VARIANTS) {
             char b[CLI_NUM];
             snprintf(msg, len, "the grid has %s variants, more than %ld", cli_fmt_num(b, nv), SW_MAX_VARIANTS);
             return -1;
         }
         p->nvar = (long)nv;
-        for (k = 0; k < p->nkey; k++)
+        for (k = 0; k < nv_; k++)
             if (p->key[k].is_range && grid_values(&p->key[k]) != 0) return -1;
     } else
-        p->nvar = p->lhs_n;
+        p->nvar = p->ncell = p->lhs_n;
     p->val = calloc((size_t)(p->nvar * p->nkey + 1), sizeof(char *));
     if (!p->val) return -1;
     if (!p->lhs) {
+        long m = p->mc > 0 ? p->mc : 1;
         for (i = 0; i < p->nvar; i++) {
-            long r = i;
-            for (k = p->nkey - 1; k >= 0; k--) {
+            long r = i / m; /* the cell */
+            for (k = nv_ - 1; k >= 0; k--) {
                 const sw_key *K = &p->key[k];
                 const char *v = K->vals[r % K->nval];
                 r /= K->nval;
                 if (!(p->val[i * p->nkey + k] = dup_str(v, strlen(v)))) return -1;
             }
+            /* the dispersed keys: variant i's own stream (sweep_mc.c) */
+            if (p->nkey > nv_ && sw_disp_draw(&p->key[nv_], p->nkey - nv_, p->seed, i, &p->val[i * p->nkey + nv_]) != 0)
+                return -1;
         }
         return 0;
     }
@@ -236,7 +243,7 @@ long sw_region(const sw_plan *p, const sw_result *res, double length, double *ar
     int k, kx = -1, ky = -1;
     long nslice = 1, i, s, stride[SW_MAX_KEYS];
     double cell, L = length > 0 ? length : 1.0;
-    if (p->lhs) return 0;
+    if (p->lhs || p->mc > 0) return 0; /* --mc: the probability per cell instead (sw_mc_cells) */
     for (k = 0; k < p->nkey; k++)
         if (p->key[k].is_range && p->key[k].nval >= 2) {
             if (kx < 0) kx = k;
@@ -290,24 +297,34 @@ long sw_region(const sw_plan *p, const sw_result *res, double length, double *ar
 
 int sw_plan_make(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed)
 {
+    return sw_plan_make_mc(p, vary, nvary, lhs, seed, NULL, 0, 0);
+}
+
+int sw_plan_make_mc(sw_plan *p, const char *const *vary, int nvary, long lhs, unsigned long long seed,
+                    const char *const *disp, int ndisp, long mc)
+{
     char msg[2048];
     int k, j;
     memset(p, 0, sizeof *p);
     p->lhs = lhs > 0;
     p->lhs_n = lhs;
     p->seed = seed;
-    for (k = 0; k < nvary; k++) {
+    p->mc = mc;
+    for (k = 0; k < nvary + ndisp; k++) {
         msg[0] = 0;
-        if (parse_vary(&p->key[p->nkey], vary[k], p->lhs, msg, sizeof msg) != 0) {
+        if ((k < nvary ? parse_vary(&p->key[p->nkey], vary[k], p->lhs, msg, sizeof msg)
+                       : sw_disp_parse(&p->key[p->nkey], disp[k - nvary], msg, sizeof msg)) != 0) {
             p->nkey++;
             sw_plan_free(p);
             return msg[0] ? cli_usage("sweep", "%s", msg) : (cli_error("out of memory"), CLI_FAIL);
         }
         p->nkey++;
+        if (k < nvary) p->nvary = p->nkey;
         for (j = 0; j < k; j++)
             if (!strcmp(p->key[j].key, p->key[k].key)) {
                 sw_plan_free(p);
-                return cli_usage("sweep", "--vary %s is given twice", vary[k]);
+                return cli_usage("sweep", "%s %s: the key is given twice", k < nvary ? "--vary" : "--disperse",
+                                 k < nvary ? vary[k] : disp[k - nvary]);
             }
     }
     msg[0] = 0;

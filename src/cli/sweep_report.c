@@ -71,6 +71,21 @@ void sw_report_end(const sw_opts *o, const sw_plan *p, const sw_result *res, lon
         free(ncap);
         free(lab);
     }
+    if (p->mc > 0) { /* the capture probability per grid cell */
+        sw_cell *cell = malloc(sizeof *cell * (size_t)(p->ncell + 1));
+        if (cell && sw_mc_cells(p, res, cell) == 0)
+            for (s = 0; s < p->ncell && s < 100; s++) {
+                int k;
+                printf("cell %ld", s);
+                for (k = 0; k < p->nvary; k++) printf(" %s=%s", p->key[k].key, p->val[s * p->mc * p->nkey + k]);
+                printf(": captured %ld of %ld, p = %.4f, Wilson 95 %% [%.4f, %.4f]", cell[s].ncap, cell[s].n, cell[s].p,
+                       cell[s].lo, cell[s].hi);
+                if (cell[s].ncap > 0) printf("; capture time mean %.4g s, median %.4g s", cell[s].t_mean, cell[s].t_p50);
+                printf("\n");
+            }
+        if (p->ncell > 100) printf("(%ld cells more in /mc of the summary)\n", p->ncell - 100);
+        free(cell);
+    }
     for (i = 0; i < p->nvar && nfail; i++)
         if (res[i].status != 0 && res[i].status != SW_NOT_RUN) printf("variant %ld failed: %s\n", i, res[i].reason);
 }
@@ -87,6 +102,41 @@ static void put_word(FILE *out, const char *v)
     }
     if (n == 0) fputs("\"\"", out);
     for (i = 0; i < n; i++) fputc(v[i] == ' ' || v[i] == '\t' ? '_' : v[i], out);
+}
+
+/* A Monte Carlo summary's table: one row per grid cell (the variants are
+ * cell-major), the --vary values, then the counts and the probability. */
+static void print_cells(const sw_summary *s, const char *path, FILE *out)
+{
+    sw_plan p;
+    sw_cell *cell;
+    long c, k;
+    memset(&p, 0, sizeof p);
+    p.mc = (long)s->mc;
+    p.nvar = (long)s->nvar;
+    p.ncell = p.nvar / p.mc;
+    cell = malloc(sizeof *cell * (size_t)(p.ncell + 1));
+    if (!cell || sw_mc_cells(&p, s->res, cell) != 0) {
+        free(cell);
+        fputs("# out of memory\n", out);
+        return;
+    }
+    fprintf(out, "# capdyn sweep summary '%s': %ld cells x %lld draws (Monte Carlo)\n", path, p.ncell, s->mc);
+    fputs("# cell", out);
+    for (k = 0; k < s->nvary; k++) fprintf(out, " %s", s->names[k]);
+    fputs(" n n_captured n_caged n_failed p_capture p_low p_high t_capture_mean peak_fn_mean epsilon_mean\n", out);
+    fputs("# p_low, p_high: Wilson 95 %; n_caged: verdict code 3; NaN: no value\n", out);
+    for (c = 0; c < p.ncell; c++) {
+        const sw_cell *C = &cell[c];
+        fprintf(out, "%ld", c);
+        for (k = 0; k < s->nvary; k++) {
+            fputc(' ', out);
+            put_word(out, s->vals[c * p.mc * s->nkey + k]);
+        }
+        fprintf(out, " %ld %ld %ld %ld %.17g %.17g %.17g %.17g %.17g %.17g\n", C->n, C->ncap, C->nverdict[3], C->nfail,
+                C->p, C->lo, C->hi, C->t_mean, C->f_mean, C->e_mean);
+    }
+    free(cell);
 }
 
 static void print_table(const sw_summary *s, const char *path, FILE *out)
@@ -142,7 +192,8 @@ static int table_child(void *arg)
         cli_error("%s", msg);
         return CLI_FAIL;
     }
-    print_table(&s, path, stdout);
+    if (s.mc > 0 && s.nvar % s.mc == 0) print_cells(&s, path, stdout);
+    else print_table(&s, path, stdout);
     sw_summary_free(&s);
     return CLI_OK;
 }

@@ -77,6 +77,12 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
     }
 }
 
+int sw_todo(const sw_ctx *cx, const sw_result *res, long i)
+{
+    const sw_opts *o = cx->o;
+    return res[i].status == SW_NOT_RUN && (o->shard_n < 1 || i % o->shard_n == o->shard_k - 1);
+}
+
 void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
 {
     const sw_plan *p = cx->p;
@@ -303,7 +309,7 @@ static int run_local(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int 
     for (;;) {
         /* hand out work: one variant per idle worker */
         for (j = 0; j < nj && !g_stop; j++) {
-            while (next < p->nvar && res[next].status != SW_NOT_RUN) next++;
+            while (next < p->nvar && !sw_todo(cx, res, next)) next++;
             if (next >= p->nvar) break;
             if (wk[j].pid <= 0 && spawn_worker(cx, &wk[j], wk, nj) != 0) {
                 cli_error("cannot start a worker process: %s", strerror(errno));
@@ -422,7 +428,7 @@ static int run_mpi(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int si
         MPI_Abort(MPI_COMM_WORLD, CLI_FAIL);
     }
     for (r = 1; r < size; r++) {
-        while (next < p->nvar && res[next].status != SW_NOT_RUN) next++;
+        while (next < p->nvar && !sw_todo(cx, res, next)) next++;
         busy[r] = next < p->nvar ? next++ : -1;
         if (busy[r] >= 0) inflight++;
         MPI_Send(busy[r] >= 0 ? &busy[r] : &stop, 1, MPI_LONG, r, SW_TAG_TASK, MPI_COMM_WORLD);
@@ -442,7 +448,7 @@ static int run_mpi(const sw_ctx *cx, const sw_meta *meta, sw_result *res, int si
             if (x.status != 0) (*nfail)++;
             (*ndone)++;
             inflight--;
-            while (next < p->nvar && res[next].status != SW_NOT_RUN) next++;
+            while (next < p->nvar && !sw_todo(cx, res, next)) next++;
             busy[r] = next < p->nvar ? next++ : -1;
             if (busy[r] >= 0) inflight++;
             MPI_Send(busy[r] >= 0 ? &busy[r] : &stop, 1, MPI_LONG, r, SW_TAG_TASK, MPI_COMM_WORLD);
