@@ -68,12 +68,16 @@ if (metric eq "verdict") {
 }
 col = (metric eq "peak_fn") ? 10 : 8
 # one colour scale for both panels (the same quantity): the range over both
+# (a panel with no value, e.g. no capture for t_capture, leaves the scale to the other)
 if (metric ne "verdict") {
+    c_lo = 1e300; c_hi = -1e300
+    undefine STATS_*
     stats fa using ($7 == 0 && (col == 10 || $6 == 1) ? column(col) : 1 / 0) nooutput
-    c_lo = STATS_min; c_hi = STATS_max
+    if (exists("STATS_min")) { c_lo = STATS_min; c_hi = STATS_max }
+    undefine STATS_*
     stats fb using ($7 == 0 && (col == 10 || $6 == 1) ? column(col) : 1 / 0) nooutput
-    c_lo = (STATS_min < c_lo) ? STATS_min : c_lo; c_hi = (STATS_max > c_hi) ? STATS_max : c_hi
-    set cbrange [c_lo : c_hi]
+    if (exists("STATS_min")) { c_lo = (STATS_min < c_lo) ? STATS_min : c_lo; c_hi = (STATS_max > c_hi) ? STATS_max : c_hi }
+    if (c_lo < c_hi) { set cbrange [c_lo : c_hi] }
 }
 
 do for [p = 1:2] {
