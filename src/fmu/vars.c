@@ -109,7 +109,7 @@ cd_status cdf_vars_build(const cd_scenario *sc, const cd_data *d, cdf_var **vars
         if (!(v = add(&l, CDF_OUTPUT, CDF_INTEGER, CDF_VERDICT, 0))) goto oom;
         snprintf(v->name, sizeof v->name, "capture.verdict");
         snprintf(v->desc, sizeof v->desc,
-                 "capture verdict, cd_verdict values: 0 unresolved, 1 captured, 2 escaped (3 reserved: caged)");
+                 "capture verdict, cd_verdict values: 0 unresolved, 1 captured, 2 escaped, 3 caged");
         if (!(v = add(&l, CDF_OUTPUT, CDF_REAL, CDF_VERDICT_T, 0))) goto oom;
         snprintf(v->name, sizeof v->name, "capture.time");
         snprintf(v->desc, sizeof v->desc, "time of the verdict [s], -1 while unresolved");
