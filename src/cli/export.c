@@ -503,6 +503,22 @@ static void pose_frame(const cd_h5r *r, pose_set *ps, long i)
     }
 }
 /* a world point / vector into the --frame body's frame (identity without it) */
+/* the largest side of the box around every body's origin at that pose, at
+ * least 0.1 m: the size of the drawn shape outlines and planes */
+static double pose_extent(const cd_h5r *r, const pose_set *ps)
+{
+    double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, extent = 0;
+    int b, k;
+    for (b = 0; b < r->nbody; b++)
+        for (k = 0; k < 3; k++) {
+            if (ps->X[3 * b + k] < lo[k]) lo[k] = ps->X[3 * b + k];
+            if (ps->X[3 * b + k] > hi[k]) hi[k] = ps->X[3 * b + k];
+        }
+    for (k = 0; k < 3; k++)
+        if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
+    return extent < 0.1 ? 0.1 : extent;
+}
+
 static void frame_point(const pose_set *ps, const double w[3], double p[3])
 {
     double d[3];
@@ -715,16 +731,9 @@ static int ex_outline(exp_ctx *c)
            "xyz"[c->o->view_u], "xyz"[c->o->view_v]);
     for (j = 0; j < c->nsel; j++) {
         long i = c->sel[j];
-        double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, extent = 0;
+        double extent;
         pose_frame(r, &ps, i);
-        for (b = 0; b < r->nbody; b++)
-            for (k = 0; k < 3; k++) {
-                if (ps.X[3 * b + k] < lo[k]) lo[k] = ps.X[3 * b + k];
-                if (ps.X[3 * b + k] > hi[k]) hi[k] = ps.X[3 * b + k];
-            }
-        for (k = 0; k < 3; k++)
-            if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
-        if (extent < 0.1) extent = 0.1;
+        extent = pose_extent(r, &ps);
         if (j > 0) fputs("\n\n", stdout);
         printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
         for (b = 0; b < r->nbody; b++) {
@@ -1520,16 +1529,9 @@ static int ex_edges(exp_ctx *c)
            c->o->frame_body >= 0 ? r->body[c->o->frame_body].full_name : "world");
     for (j = 0; j < c->nsel; j++) {
         long i = c->sel[j];
-        double lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL}, hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL}, extent = 0;
+        double extent;
         pose_frame(r, &ps, i);
-        for (b = 0; b < r->nbody; b++)
-            for (k = 0; k < 3; k++) {
-                if (ps.X[3 * b + k] < lo[k]) lo[k] = ps.X[3 * b + k];
-                if (ps.X[3 * b + k] > hi[k]) hi[k] = ps.X[3 * b + k];
-            }
-        for (k = 0; k < 3; k++)
-            if (r->nbody > 0 && hi[k] - lo[k] > extent) extent = hi[k] - lo[k];
-        if (extent < 0.1) extent = 0.1;
+        extent = pose_extent(r, &ps);
         if (j > 0) fputs("\n\n", stdout);
         printf("# frame %ld sample %ld t %.9g\n", j, i, c->t[i]);
         for (b = 0; b < r->nbody; b++) {

@@ -186,6 +186,8 @@ typedef struct {
 } sw_ctx;
 
 /* ---- sweep_plan.c ---- */
+/* a NUL-terminated copy of the first n bytes of s (malloc; NULL when out of memory) */
+char *sw_dup_str(const char *s, size_t n);
 /* The plan of --vary texts vary (nvary), a grid or (lhs > 0) a Latin
  * hypercube of lhs variants with seed: p filled (free with sw_plan_free).
  * CLI_OK, or the exit status after one error line (usage: CLI_USAGE). */

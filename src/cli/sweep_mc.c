@@ -30,15 +30,6 @@ static const struct {
 };
 #define NDIST (sizeof dists / sizeof dists[0])
 
-static char *dup_str(const char *s, size_t n)
-{
-    char *d = malloc(n + 1);
-    if (d) {
-        memcpy(d, s, n);
-        d[n] = 0;
-    }
-    return d;
-}
 
 static int bad(char *msg, size_t len, const char *arg, const char *what)
 {
@@ -119,8 +110,8 @@ int sw_disp_parse(sw_key *k, const char *arg, char *msg, size_t len)
         break;
     }
     }
-    k->key = dup_str(arg, (size_t)(eq - arg));
-    k->spec = dup_str(eq + 1, strlen(eq + 1));
+    k->key = sw_dup_str(arg, (size_t)(eq - arg));
+    k->spec = sw_dup_str(eq + 1, strlen(eq + 1));
     return k->key && k->spec ? 0 : -1;
 }
 
@@ -219,7 +210,7 @@ int sw_disp_draw(const sw_key *key, int nkey, unsigned long long seed, long idx,
     gsl_rng_set(r, (unsigned long)(mix(mix(seed) ^ (unsigned long long)idx) & 0xffffffffULL));
     for (k = 0; k < nkey; k++) {
         sw_disp_one(&key[k], r, buf, sizeof buf, x);
-        if (!(out[k] = dup_str(buf, strlen(buf)))) {
+        if (!(out[k] = sw_dup_str(buf, strlen(buf)))) {
             gsl_rng_free(r);
             return -1;
         }

@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-static char *dup_str(const char *s, size_t n)
+char *sw_dup_str(const char *s, size_t n)
 {
     char *d = malloc(n + 1);
     if (d) {
@@ -75,7 +75,7 @@ static int split_list(sw_key *k, const char *s, char *msg, size_t len)
                 if (!nv) return -1;
                 k->vals = nv;
             }
-            if (!(k->vals[k->nval++] = dup_str(start, (size_t)(p - start)))) return -1;
+            if (!(k->vals[k->nval++] = sw_dup_str(start, (size_t)(p - start)))) return -1;
             if (!*p) return 0;
             start = p + 1;
         }
@@ -94,15 +94,15 @@ static int parse_vary(sw_key *k, const char *arg, int lhs, char *msg, size_t len
         snprintf(msg, len, "--vary expects KEY=A:B:N or KEY=V1,V2,..., got '%s'", arg);
         return -1;
     }
-    k->key = dup_str(arg, (size_t)(eq - arg));
-    k->spec = dup_str(eq + 1, strlen(eq + 1));
+    k->key = sw_dup_str(arg, (size_t)(eq - arg));
+    k->spec = sw_dup_str(eq + 1, strlen(eq + 1));
     if (!k->key || !k->spec) return -1;
     /* a range: two or three numbers separated by ':' */
     c1 = strchr(k->spec, ':');
     c2 = c1 ? strchr(c1 + 1, ':') : NULL;
     if (c1 && !strchr(k->spec, ',') && !strchr(k->spec, '"') && (!c2 || !strchr(c2 + 1, ':'))) {
-        char *a = dup_str(k->spec, (size_t)(c1 - k->spec));
-        char *b = c2 ? dup_str(c1 + 1, (size_t)(c2 - c1 - 1)) : dup_str(c1 + 1, strlen(c1 + 1));
+        char *a = sw_dup_str(k->spec, (size_t)(c1 - k->spec));
+        char *b = c2 ? sw_dup_str(c1 + 1, (size_t)(c2 - c1 - 1)) : sw_dup_str(c1 + 1, strlen(c1 + 1));
         long n = 0;
         int bad = !a || !b || cli_number(a, &k->a) || cli_number(b, &k->b);
         free(a);
@@ -132,7 +132,7 @@ static int grid_values(sw_key *k)
         /* weights of both ends: exact at both, symmetric about the middle */
         double v = n == 1 ? k->a : i == n - 1 ? k->b : (k->a * (double)(n - 1 - i) + k->b * (double)i) / (double)(n - 1);
         fmt_grid(buf, sizeof buf, v, n > 1 ? (k->b - k->a) / (double)(n - 1) : 0);
-        if (!(k->vals[k->nval++] = dup_str(buf, strlen(buf)))) return -1;
+        if (!(k->vals[k->nval++] = sw_dup_str(buf, strlen(buf)))) return -1;
     }
     return 0;
 }
@@ -182,7 +182,7 @@ static int make_plan(sw_plan *p, char *msg, size_t len)
                 const sw_key *K = &p->key[k];
                 const char *v = K->vals[r % K->nval];
                 r /= K->nval;
-                if (!(p->val[i * p->nkey + k] = dup_str(v, strlen(v)))) return -1;
+                if (!(p->val[i * p->nkey + k] = sw_dup_str(v, strlen(v)))) return -1;
             }
             /* the dispersed keys: variant i's own stream (sweep_mc.c) */
             if (p->nkey > nv_ && sw_disp_draw(&p->key[nv_], p->nkey - nv_, p->seed, i, &p->val[i * p->nkey + nv_]) != 0)
@@ -212,7 +212,7 @@ static int make_plan(sw_plan *p, char *msg, size_t len)
                     long j = (long)(u * (double)K->nval);
                     v = K->vals[j < K->nval ? j : K->nval - 1];
                 }
-                if (!(p->val[i * p->nkey + k] = dup_str(v, strlen(v)))) {
+                if (!(p->val[i * p->nkey + k] = sw_dup_str(v, strlen(v)))) {
                     free(perm);
                     return -1;
                 }
@@ -342,7 +342,7 @@ char **sw_overrides(const char *const *sets, int nsets, const sw_plan *p, long i
     int k;
     if (!ov) return NULL;
     for (k = 0; k < nsets; k++)
-        if (!(ov[k] = dup_str(sets[k], strlen(sets[k])))) goto fail;
+        if (!(ov[k] = sw_dup_str(sets[k], strlen(sets[k])))) goto fail;
     for (k = 0; k < p->nkey; k++) {
         const char *v = p->val[idx * p->nkey + k];
         if (!(ov[nsets + k] = malloc(strlen(p->key[k].key) + strlen(v) + 2))) goto fail;
