@@ -2852,19 +2852,27 @@ cd_scenario *load(const char *path, const char *const *overrides, int noverrides
     sc->max_rhs_evals = run.max_rhs_evals;
     sc->min_steps = run.min_steps;
     sc->min_rhs_evals = run.min_rhs_evals;
-    {   /* URDF imports: the trees `capdyn check` prints, and the warnings */
+    try { /* URDF imports: the trees `capdyn check` prints, and the warnings */
         std::string tree;
         for (auto &x : b.urdfs) {
             char *d = cd_urdf_describe(x.first.get(), sc->model, x.second);
-            if (d) tree += d;
+            if (d) {
+                try {
+                    tree += d;
+                } catch (...) {
+                    std::free(d);
+                    throw;
+                }
+            }
             std::free(d);
         }
         sc->imported = cdup(tree);
         sc->warnings = cdup(b.warnings);
-        if (!sc->imported || !sc->warnings) {
-            free_scenario(sc);
-            throw std::bad_alloc();
-        }
+        if (!sc->imported || !sc->warnings) throw std::bad_alloc();
+    } catch (...) {
+        /* the scenario owns the model by now: out of memory here frees both */
+        free_scenario(sc);
+        throw;
     }
     return sc;
 }
