@@ -465,7 +465,8 @@ fmi2Status fmi2GetReal(fmi2Component comp, const fmi2ValueReference vr[], size_t
         case CDF_FN_OBJECT: value[i] = obj_fn(c, v->a, &ns, &nl); break;
         case CDF_VERDICT_T:
             value[i] = !c->have_mon ? -1.0 : c->mon.verdict == CD_VERDICT_CAPTURED ? c->mon.t_capture
-                     : c->mon.verdict == CD_VERDICT_ESCAPED ? c->mon.t_escape : -1.0;
+                     : c->mon.verdict == CD_VERDICT_ESCAPED ? c->mon.t_escape
+                     : c->mon.verdict == CD_VERDICT_CAGED ? c->mon.t_cage : -1.0;
             break;
         default: value[i] = c->in[vr[i]]; break; /* an input */
         }
