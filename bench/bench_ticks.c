@@ -22,7 +22,10 @@
  * are counted while a tick runs), and the run's status.
  *
  * Usage: bench_ticks [-o results.txt] [--loop example|capture]... [--stepper NAME]...
- * (run from the repository root). */
+ *                    [--set KEY=VALUE]...
+ * (run from the repository root). --set overrides a key of the capture
+ * scenario after the stepper's (e.g. the flight-loop setting of
+ * docs/performance.md: --set simulation.rtol=1e-6 --set simulation.atol=1e-9). */
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
 #include "../examples/control_loop_model.h"
@@ -165,13 +168,17 @@ static void loop_example(cd_stepper stepper)
 }
 
 /* the capture scenario at 100 Hz with the given stepper */
+#define MAX_SETS 8
+static const char *user_sets[MAX_SETS];
+static int n_user_sets;
+
 static void loop_capture(cd_stepper stepper)
 {
     const char *path = "scenarios/capture_handrail_tumbling.toml";
     const double period = 0.01;
     char ov[3][64];
-    const char *ovp[3];
-    int nov = 0;
+    const char *ovp[3 + MAX_SETS];
+    int nov = 0, i;
     cd_error err;
     cd_scenario *sc;
     cd_data *d = NULL;
@@ -183,7 +190,8 @@ static void loop_capture(cd_stepper stepper)
     snprintf(ov[nov++], sizeof ov[0], "simulation.integrator=\"%s\"", cd_stepper_name(stepper));
     if (stepper == CD_STEP_ROS34PW2) snprintf(ov[nov++], sizeof ov[0], "simulation.h_max=0.05");
     if (stepper == CD_STEP_RK4_FIXED) snprintf(ov[nov++], sizeof ov[0], "simulation.h_fixed=1e-4");
-    ovp[0] = ov[0]; ovp[1] = ov[1]; ovp[2] = ov[2];
+    for (i = 0; i < nov; i++) ovp[i] = ov[i];
+    for (i = 0; i < n_user_sets; i++) ovp[nov++] = user_sets[i];
     sc = cd_scenario_load(path, ovp, nov, &err);
     if (!sc) { say("capture  %-9s load: %s\n", cd_stepper_name(stepper), err.msg); return; }
     n_ticks = (long)(sc->duration / period + 0.5);
@@ -214,7 +222,7 @@ int main(int argc, char **argv)
 {
     static const cd_stepper ex_default[] = {CD_STEP_RK4_FIXED, CD_STEP_RK8PD, CD_STEP_ROS34PW2, CD_STEP_RKF45,
                                             CD_STEP_RKCK, CD_STEP_RK4IMP, CD_STEP_MSBDF};
-    static const cd_stepper cap_default[] = {CD_STEP_RK8PD, CD_STEP_ROS34PW2, CD_STEP_RK4_FIXED, CD_STEP_RKF45};
+    static const cd_stepper cap_default[] = {CD_STEP_AUTO, CD_STEP_RK8PD, CD_STEP_ROS34PW2, CD_STEP_RK4_FIXED, CD_STEP_RKF45};
     cd_stepper steppers[CD_STEP_NTYPES];
     int nstep = 0, do_ex = 0, do_cap = 0, i;
     const char *out = NULL;
@@ -231,8 +239,11 @@ int main(int argc, char **argv)
             int s = cd_stepper_from_name(argv[++i]);
             if (s < 0) { fprintf(stderr, "%s: unknown stepper '%s'\n", argv[0], argv[i]); return 2; }
             steppers[nstep++] = (cd_stepper)s;
+        } else if (!strcmp(argv[i], "--set") && i + 1 < argc && n_user_sets < MAX_SETS) {
+            user_sets[n_user_sets++] = argv[++i];
         } else {
-            fprintf(stderr, "usage: %s [-o file] [--loop example|capture]... [--stepper NAME]...\n", argv[0]);
+            fprintf(stderr, "usage: %s [-o file] [--loop example|capture]... [--stepper NAME]... [--set KEY=VALUE]...\n",
+                    argv[0]);
             return 2;
         }
     }
@@ -241,6 +252,7 @@ int main(int argc, char **argv)
     strftime(stamp, sizeof stamp, "%Y-%m-%d %H:%M:%S UTC", gmtime(&now));
     say("\n== bench_ticks: control-loop tick times per stepper, capdyn %s, %s\n", cd_version(), stamp);
     say("   example: examples/control_loop.c's loop, 1 kHz, 5 s; capture: capture_handrail_tumbling.toml, 100 Hz, 4.5 s\n");
+    for (i = 0; i < n_user_sets; i++) say("   capture loop with --set %s\n", user_sets[i]);
     say("   times in ms per tick (wall clock | this thread's CPU); over = ticks longer than the period (wall)\n");
     say("%-8s %-9s %6s %8s %8s %8s %8s %8s %8s %6s %6s %6s %6s %6s  %s\n", "loop", "stepper", "ticks", "wall med",
         "wall p99", "wall max", "cpu med", "cpu p99", "cpu max", "over", "ev med", "ev max", "al max", "al sum",
