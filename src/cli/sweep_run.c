@@ -57,6 +57,7 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
         r->verdict = (int)mon->verdict;
         r->t_capture = mon->t_capture;
         r->t_escape = mon->t_escape;
+        r->t_cage = mon->t_cage;
         r->peak_fn = cap.peak_fn;
         r->peak_tau = cap.peak_tau;
         r->epsilon = cap.epsilon;
