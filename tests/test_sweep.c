@@ -545,11 +545,12 @@ Test(sweep, a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages
  * NaN for a captured one, and kept by --shard and --merge. The frictionless
  * Space Gripper wrap of tests/test_verdict.c (contact.mu = mu_max = 0) cages
  * at 0.547 s; with mu_max = 0.5 (the static coefficient; mu = 0) it is
- * captured at 0.574 s. Two 1 s runs. */
+ * captured at 0.574 s. A kept run (--keep-runs) stores the peaks over steps
+ * of the capdyn run. 1 s runs. */
 Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_and_merge, .timeout = 180)
 {
-    char dir[256], sc[512], full[512], sh[2][512], merged[512], run[512], *out = NULL, *err = NULL, *line, *col,
-        *save;
+    char dir[256], sc[512], full[512], sh[2][512], merged[512], run[512], keep[512], *out = NULL, *err = NULL, *line,
+        *col, *save;
     double t_run, t0, t1;
     char verdict[32];
     hid_t f;
@@ -560,7 +561,9 @@ Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_an
     snprintf(merged, sizeof merged, "%s/merged.h5", dir);
     snprintf(run, sizeof run, "%s/run.h5", dir);
 #define CAGE_SETS "--set", "simulation.duration=1.0", "--set", "contact.mu=0.0", "--vary", "contact.mu_max=0.0,0.5"
-    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, CAGE_SETS, "-j", "1", "-q", "-o", full, NULL), 0, "%s", err);
+    snprintf(keep, sizeof keep, "%s/keep", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, CAGE_SETS, "-j", "1", "-q", "-o", full, "--keep-runs", keep, NULL),
+                 0, "%s", err);
     free(err);
     for (k = 0; k < 2; k++) {
         char which[8];
@@ -584,6 +587,28 @@ Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_an
     H5Fclose(f);
     cr_assert_str_eq(verdict, "caged");
     cr_expect(fabs(t_run - 0.547) < 1.5e-3, "capdyn run: caged at %.17g s", t_run);
+    /* the kept run's file has the peaks over steps of capdyn run's (the same
+     * run: bit for bit) */
+    {
+        static const char *const pk[4] = {"/contacts/fn_step_max", "/contacts/fn_step_body", "/contacts/fn_step_onset",
+                                          "/contacts/ft_step_max"};
+        char kp[600];
+        hid_t fk;
+        snprintf(kp, sizeof kp, "%s/variant_000000.h5", keep);
+        fk = open_ro(kp);
+        f = open_ro(run);
+        cr_assert(fk >= 0 && f >= 0, "%s", kp);
+        for (k = 0; k < 4; k++) {
+            size_t na, nb;
+            double *va = read_all(f, pk[k], &na), *vb = read_all(fk, pk[k], &nb);
+            cr_assert(na == nb && na > 0, "%s: %zu and %zu slots", pk[k], na, nb);
+            cr_expect(memcmp(va, vb, na * sizeof *va) == 0, "%s differs between capdyn run and the kept run", pk[k]);
+            free(va);
+            free(vb);
+        }
+        H5Fclose(fk);
+        H5Fclose(f);
+    }
 
     f = open_ro(full);
     cr_assert(f >= 0);

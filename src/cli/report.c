@@ -15,6 +15,7 @@
  * relative figure. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "../io/h5_schema.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -222,12 +223,52 @@ static void report_step_peaks(FILE *out, const cli_run_extra *x, int nslot)
     print_wrapped_kv(out, "peak |ft| over steps", line);
 }
 
+/* The peaks over steps stored in the file (/contacts/fn_step_max ...,
+ * h5_schema.h) into fx, pointing into buf (4 nslot, caller frees): 1 if
+ * all four are there and finite, else 0 with why (for the line that says
+ * they are not stored). */
+static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, char *why, size_t len)
+{
+    int nslot = r->nslot, k, i, missing = 0, nonfinite = 0;
+    double *b = malloc(sizeof(double) * CD_H5_STEP_COUNT * (size_t)(nslot > 0 ? nslot : 1));
+    *buf = b;
+    memset(fx, 0, sizeof *fx);
+    if (!b) {
+        snprintf(why, len, "not read (out of memory)");
+        return 0;
+    }
+    for (k = 0; k < CD_H5_STEP_COUNT; k++) {
+        char path[64];
+        double *v = b + (size_t)k * (size_t)nslot;
+        snprintf(path, sizeof path, "/contacts/%s", cd_h5_step_peak_names[k]);
+        if (cd_h5r_vec(r, path, v, nslot) != 0) missing = 1;
+        else
+            for (i = 0; i < nslot; i++) nonfinite |= !isfinite(v[i]);
+    }
+    if (missing)
+        snprintf(why, len, "not stored in this file (written by a capdyn from before the peaks over steps were "
+                 "kept in results files; capdyn run prints them at its end)");
+    else if (nonfinite)
+        snprintf(why, len, "not stored in this file (its run did not close it: the peaks over steps are written "
+                 "at the end of the run)");
+    if (missing || nonfinite) return 0;
+    fx->fn_max = b + (size_t)CD_H5_STEP_FN_MAX * (size_t)nslot;
+    fx->fn_body = b + (size_t)CD_H5_STEP_FN_BODY * (size_t)nslot;
+    fx->fn_onset = b + (size_t)CD_H5_STEP_FN_ONSET * (size_t)nslot;
+    fx->ft_max = b + (size_t)CD_H5_STEP_FT_MAX * (size_t)nslot;
+    return 1;
+}
+
+/* The contacts: slots that closed with their peaks at the samples and, from
+ * a run's x or else from the file, over every step (the same lines in
+ * capdyn run and capdyn info). */
 static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
 {
     int nslot = r->nslot, nclosed = 0, kfn = 0, kft = 0;
-    double *fn = NULL, *ft = NULL, *mode = NULL, *mfn, *mft;
+    double *fn = NULL, *ft = NULL, *mode = NULL, *mfn, *mft, *sbuf = NULL;
     cd_error err;
-    char line[1024];
+    char line[1024], why[256] = "";
+    cli_run_extra fx;
 
     if (nslot > 0) {
         fn = cd_h5r_series(r, "/contacts/fn", NULL, &err);
@@ -239,6 +280,7 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
         free(fn); free(ft); free(mode);
         return;
     }
+    if (!(x && x->fn_body && x->fn_onset) && stored_step_peaks(r, &fx, &sbuf, why, sizeof why)) x = &fx;
     mfn = calloc((size_t)nslot, sizeof *mfn);
     mft = calloc((size_t)nslot, sizeof *mft);
     if (mfn && mft) nclosed = contact_maxima(r, fn, ft, mode, x, mfn, mft, &kfn, &kft);
@@ -251,8 +293,9 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
                  mfn[kfn], kfn, mft[kft], kft);
         print_wrapped_kv(out, "peak fn at samples", line);
         if (x && x->fn_body && x->fn_onset) report_step_peaks(out, x, nslot);
+        else if (why[0]) print_wrapped_kv(out, "peak fn over steps", why);
     }
-    free(mfn); free(mft); free(fn); free(ft); free(mode);
+    free(mfn); free(mft); free(fn); free(ft); free(mode); free(sbuf);
 }
 
 /* ---- the capture verdict (scenarios with a gripper and an object) ---- */

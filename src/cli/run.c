@@ -726,6 +726,9 @@ int cmd_run(int argc, char **argv)
         cli_capture_of(&mon, ctl, ctl ? &merit : NULL, m, d, &cap);
         cd_h5_set_capture(w, &cap);
     }
+    /* the peaks over steps go into the file too, so that capdyn info prints
+     * the lines this run prints (docs/cli.md, "Peak forces") */
+    cd_h5_set_step_peaks(w, m->nslot, ctx.fn_max, ctx.fn_body, ctx.fn_onset, ctx.ft_max);
     cst = cd_h5_close(w, m, d, st, msg, &werr);
     if (cst != CD_OK && !wmsg[0]) snprintf(wmsg, sizeof wmsg, "%s", werr.msg);
     ctx.wall0 = cli_wall() - ctx.wall0;

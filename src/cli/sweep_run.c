@@ -66,6 +66,7 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
         r->n_slip = cap.n_slip;
         if (w) cd_h5_set_capture(w, &cap);
     }
+    if (w) cd_h5_set_step_peaks(w, sc->model->nslot, ctx->fn_max, ctx->fn_body, ctx->fn_onset, ctx->ft_max);
     if (w) {
         cd_error cerr;
         char msg[SW_REASON + 64];
@@ -146,6 +147,12 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
     }
     ctx.fn_max = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
     ctx.ft_max = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    /* the onset transients apart (cli.h), as capdyn run: a kept run's file
+     * (--keep-runs) stores the peaks over steps that capdyn run prints */
+    ctx.fn_onset = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    ctx.fn_body = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    ctx.onset = malloc((size_t)(sc->model->nslot ? sc->model->nslot : 1));
+    if (ctx.onset) memset(ctx.onset, 1, (size_t)(sc->model->nslot ? sc->model->nslot : 1));
     ctx.t_end = sc->duration;
     ctx.wall0 = t0;
     ctx.last_draw = -1e300;
@@ -154,7 +161,7 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
     ctx.until_verdict = cx->o->until_verdict;
     ctx.ctl = ctl;
     ctx.merit = ctl ? &merit : NULL;
-    if (!ctx.fn_max || !ctx.ft_max) {
+    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.onset) {
         r->status = CD_ENOMEM;
         snprintf(r->reason, sizeof r->reason, "out of memory");
         goto out;
@@ -176,6 +183,9 @@ out:
     if (w) cd_h5_close(w, sc->model, d, (cd_status)r->status, r->reason, NULL);
     free(ctx.fn_max);
     free(ctx.ft_max);
+    free(ctx.fn_onset);
+    free(ctx.fn_body);
+    free(ctx.onset);
     cd_data_free(d);
     cd_ctrl_free(ctl);
     cd_scenario_free(sc);
