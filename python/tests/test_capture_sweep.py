@@ -97,7 +97,15 @@ def test_caged_maps_to_its_name_and_time(tmp_path, capdyn_bin):
     res = capdyn.Simulation(capdyn.load(cyl, set=sets)).run()
     with capdyn.Results(str(out)) as r:
         ref = r.capture
+        pk = r.step_peaks()
     cap = res.capture
+    # the peaks over steps the run stored (capdyn info prints them): every
+    # step's force is in the onset window or out of it, and the largest is
+    # the one the Python loop keeps (the same steps)
+    assert pk is not None and set(pk) == {"fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max"}
+    assert np.array_equal(pk["fn_step_max"], np.maximum(pk["fn_step_body"], pk["fn_step_onset"]))
+    assert pk["fn_step_max"].max() == res.fn_step_max
+    assert np.all(pk["ft_step_max"] == 0.0)  # frictionless
     assert cap.verdict == ref["verdict"] == "caged"
     assert not cap.captured
     assert cap.t == ref["t"] and abs(cap.t - 0.547) < 1.5e-3
