@@ -590,15 +590,16 @@ Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_an
     /* the kept run's file has the peaks over steps of capdyn run's (the same
      * run: bit for bit) */
     {
-        static const char *const pk[4] = {"/contacts/fn_step_max", "/contacts/fn_step_body", "/contacts/fn_step_onset",
-                                          "/contacts/ft_step_max"};
+        static const char *const pk[6] = {"/contacts/fn_step_max", "/contacts/fn_step_body", "/contacts/fn_step_onset",
+                                          "/contacts/ft_step_max", "/contacts/t_fn_step_body",
+                                          "/contacts/t_fn_step_onset"};
         char kp[600];
         hid_t fk;
         snprintf(kp, sizeof kp, "%s/variant_000000.h5", keep);
         fk = open_ro(kp);
         f = open_ro(run);
         cr_assert(fk >= 0 && f >= 0, "%s", kp);
-        for (k = 0; k < 4; k++) {
+        for (k = 0; k < 6; k++) {
             size_t na, nb;
             double *va = read_all(f, pk[k], &na), *vb = read_all(fk, pk[k], &nb);
             cr_assert(na == nb && na > 0, "%s: %zu and %zu slots", pk[k], na, nb);

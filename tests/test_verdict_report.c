@@ -74,6 +74,19 @@ static double after_key(const char *text, const char *key)
     return NAN;
 }
 
+/* the time in " at t = T s" of the line that starts with key (NaN if absent) */
+static double time_in(const char *text, const char *key)
+{
+    const char *p = text;
+    size_t n = strlen(key);
+    while (p && *p) {
+        const char *e = strchr(p, '\n'), *a = strstr(p, " at t = ");
+        if (!strncmp(p, key, n) && a && (!e || a < e)) return strtod(a + 8, NULL);
+        p = e ? e + 1 : NULL;
+    }
+    return NAN;
+}
+
 Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_onset_transient, .timeout = 60)
 {
     char dir[64], toml[256], h5[256], *out = NULL, *err = NULL, *iout = NULL;
@@ -111,6 +124,17 @@ Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_on
     cr_expect(onset <= 200.0 * (1 + 1e-9) && onset > 200.0 * 0.999, "onset transient %.9g, expected D v0 = 200 N\n%s",
               onset, out);
     cr_expect_not_null(strstr(out, "onset transients excluded"), "%s", out);
+    /* when: the touch at t = 5.5 ms (gap 5.5 mm at 1 m/s) for the transient,
+     * the window's end w s = 2/3 for the body, each reached by the first
+     * step at or past it (h <= 1e-5 s) */
+    {
+        double tb = time_in(out, "peak fn over steps"), to = time_in(out, "onset transient");
+        double tb0 = 5.5e-3 + ws / 100.0, to0 = 5.5e-3;
+        cr_expect(tb >= tb0 - 1e-9 && tb <= tb0 + 1e-5 + 1e-9, "peak fn over steps at t = %.9g s, closed form %.9g s",
+                  tb, tb0);
+        cr_expect(to >= to0 - 1e-9 && to <= to0 + 1e-5 + 1e-9, "onset transient at t = %.9g s, the touch at %.9g s", to,
+                  to0);
+    }
     /* info reads the file: the samples, and the peaks over steps the run
      * stored at its end, under the same names and values */
     cr_assert_eq(capdyn(dir, &iout, &err, "info", h5, (char *)NULL), 0, "%s", err);
@@ -120,6 +144,8 @@ Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_on
                  after_key(iout, "peak fn over steps"), body, iout);
     cr_expect_eq(after_key(iout, "onset transient"), onset, "info %.9g, run %.9g\n%s", after_key(iout, "onset transient"),
                  onset, iout);
+    cr_expect_eq(time_in(iout, "peak fn over steps"), time_in(out, "peak fn over steps"), "%s", iout);
+    cr_expect_eq(time_in(iout, "onset transient"), time_in(out, "onset transient"), "%s", iout);
     cr_expect_null(strstr(iout, "max force"), "the old ambiguous header is gone:\n%s", iout);
     free(out);
     free(err);
@@ -253,16 +279,23 @@ Test(verdict_report, info_prints_the_run_summary_line_for_line_with_the_peaks_ov
         H5Gclose(gc);
     }
     cr_assert_gt(nslot, 0);
-    v = malloc(sizeof(double) * 4 * (size_t)nslot);
+    v = malloc(sizeof(double) * 6 * (size_t)nslot);
     read_vec(f, "/contacts/fn_step_max", v, nslot);
     read_vec(f, "/contacts/fn_step_body", v + nslot, nslot);
     read_vec(f, "/contacts/fn_step_onset", v + 2 * nslot, nslot);
     read_vec(f, "/contacts/ft_step_max", v + 3 * nslot, nslot);
+    read_vec(f, "/contacts/t_fn_step_body", v + 4 * nslot, nslot);
+    read_vec(f, "/contacts/t_fn_step_onset", v + 5 * nslot, nslot);
     for (k = 0; k < nslot; k++) {
         double mx = v[k], bo = v[nslot + k], on = v[2 * nslot + k];
         cr_expect(mx == fmax(bo, on), "slot %d: fn_step_max %.17g, body %.17g, onset %.17g", k, mx, bo, on);
         cr_expect(v[3 * nslot + k] == 0.0, "slot %d: frictionless, |ft| over steps %g", k, v[3 * nslot + k]);
         nonset += on > 0;
+        /* a time for each peak reached, inside the run; NaN for none */
+        cr_expect(bo > 0 ? v[4 * nslot + k] > 0 && v[4 * nslot + k] <= 1.0 : isnan(v[4 * nslot + k]),
+                  "slot %d: body %g at t = %g", k, bo, v[4 * nslot + k]);
+        cr_expect(on > 0 ? v[5 * nslot + k] > 0 && v[5 * nslot + k] <= 1.0 : isnan(v[5 * nslot + k]),
+                  "slot %d: onset %g at t = %g", k, on, v[5 * nslot + k]);
     }
     cr_expect_gt(nonset, 0, "no slot with an onset transient");
     H5Fclose(f);
@@ -279,7 +312,8 @@ Test(verdict_report, info_prints_the_run_summary_line_for_line_with_the_peaks_ov
  * samples, and says why the peaks over steps are not there, in one line. */
 Test(verdict_report, info_of_a_file_without_the_peaks_over_steps_says_they_are_not_stored, .timeout = 60)
 {
-    static const char *const names[4] = {"fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max"};
+    static const char *const names[6] = {"fn_step_max",  "fn_step_body",   "fn_step_onset",
+                                         "ft_step_max",  "t_fn_step_body", "t_fn_step_onset"};
     char dir[64], toml[256], h5[256], *out = NULL, *err = NULL, *iout = NULL, *l;
     double nans[64];
     int k;
@@ -319,7 +353,7 @@ Test(verdict_report, info_of_a_file_without_the_peaks_over_steps_says_they_are_n
     f = H5Fopen(h5, H5F_ACC_RDWR, H5P_DEFAULT);
     cr_assert(f >= 0);
     g = H5Gopen2(f, "contacts", H5P_DEFAULT);
-    for (k = 0; k < 4; k++) cr_assert(H5Ldelete(g, names[k], H5P_DEFAULT) >= 0, "delete %s", names[k]);
+    for (k = 0; k < 6; k++) cr_assert(H5Ldelete(g, names[k], H5P_DEFAULT) >= 0, "delete %s", names[k]);
     H5Gclose(g);
     H5Fclose(f);
     cr_assert_eq(capdyn(dir, &iout, &err, "info", h5, (char *)NULL), 0, "%s", err);

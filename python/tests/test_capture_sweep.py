@@ -102,7 +102,8 @@ def test_caged_maps_to_its_name_and_time(tmp_path, capdyn_bin):
     # the peaks over steps the run stored (capdyn info prints them): every
     # step's force is in the onset window or out of it, and the largest is
     # the one the Python loop keeps (the same steps)
-    assert pk is not None and set(pk) == {"fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max"}
+    assert pk is not None and set(pk) == {"fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max",
+                                          "t_fn_step_body", "t_fn_step_onset"}
     assert np.array_equal(pk["fn_step_max"], np.maximum(pk["fn_step_body"], pk["fn_step_onset"]))
     assert pk["fn_step_max"].max() == res.fn_step_max
     assert np.all(pk["ft_step_max"] == 0.0)  # frictionless

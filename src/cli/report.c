@@ -200,22 +200,35 @@ static void contact_table(FILE *out, const cd_h5r *r, const double *mode, const 
     }
 }
 
-/* a run's peak forces over every step: the physical peak (onset transients
- * excluded), the onset transient apart, the tangential peak */
-static void report_step_peaks(FILE *out, const cli_run_extra *x, int nslot)
+/* "slot K: LABEL) at t = T s" of slot k whose peak was at t[k] (t NULL or
+ * NaN: no time) into buf */
+static void slot_when(const cd_h5r *r, int k, const double *t, char *buf, size_t len)
 {
-    char line[1024];
+    char lab[512];
+    slot_label(r, k, lab, sizeof lab);
+    if (t && isfinite(t[k])) snprintf(buf, len, "slot %d: %s) at t = %.9g s", k, lab, t[k]);
+    else snprintf(buf, len, "slot %d: %s)", k, lab);
+}
+
+/* a run's peak forces over every step: the physical peak (onset transients
+ * excluded), the onset transient apart, the tangential peak; each with its
+ * slot and, for the normal force, its time */
+static void report_step_peaks(FILE *out, const cd_h5r *r, const cli_run_extra *x, int nslot)
+{
+    char line[1024], where[700];
     int k, kb = 0, ko = 0, kt = 0;
     for (k = 0; k < nslot; k++) {
         if (x->fn_body[k] > x->fn_body[kb]) kb = k;
         if (x->fn_onset[k] > x->fn_onset[ko]) ko = k;
         if (x->ft_max[k] > x->ft_max[kt]) kt = k;
     }
-    snprintf(line, sizeof line, "%.6g N (slot %d), onset transients excluded", x->fn_body[kb], kb);
+    slot_when(r, kb, x->t_body, where, sizeof where);
+    snprintf(line, sizeof line, "%.6g N (%s, onset transients excluded", x->fn_body[kb], where);
     print_wrapped_kv(out, "peak fn over steps", line);
+    slot_when(r, ko, x->t_onset, where, sizeof where);
     if (x->fn_onset[ko] > 0)
-        snprintf(line, sizeof line, "%.6g N (slot %d): the largest force while the damper term exceeded the "
-                 "elastic term just after a contact closed", x->fn_onset[ko], ko);
+        snprintf(line, sizeof line, "%.6g N (%s: the largest force while the damper term exceeded the "
+                 "elastic term just after a contact closed", x->fn_onset[ko], where);
     else
         snprintf(line, sizeof line, "none (no contact closed with its damper term above its elastic term)");
     print_wrapped_kv(out, "onset transient", line);
@@ -243,7 +256,7 @@ static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, c
         snprintf(path, sizeof path, "/contacts/%s", cd_h5_step_peak_names[k]);
         if (cd_h5r_vec(r, path, v, nslot) != 0) missing = 1;
         else
-            for (i = 0; i < nslot; i++) nonfinite |= !isfinite(v[i]);
+            for (i = 0; i < nslot && k < CD_H5_STEP_T_BODY; i++) nonfinite |= !isfinite(v[i]); /* times may be NaN */
     }
     if (missing)
         snprintf(why, len, "not stored in this file (written by a capdyn from before the peaks over steps were "
@@ -256,6 +269,8 @@ static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, c
     fx->fn_body = b + (size_t)CD_H5_STEP_FN_BODY * (size_t)nslot;
     fx->fn_onset = b + (size_t)CD_H5_STEP_FN_ONSET * (size_t)nslot;
     fx->ft_max = b + (size_t)CD_H5_STEP_FT_MAX * (size_t)nslot;
+    fx->t_body = b + (size_t)CD_H5_STEP_T_BODY * (size_t)nslot;
+    fx->t_onset = b + (size_t)CD_H5_STEP_T_ONSET * (size_t)nslot;
     return 1;
 }
 
@@ -292,7 +307,7 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
         snprintf(line, sizeof line, "%.6g N (slot %d), onset transients included; peak |ft| at samples %.6g N (slot %d)",
                  mfn[kfn], kfn, mft[kft], kft);
         print_wrapped_kv(out, "peak fn at samples", line);
-        if (x && x->fn_body && x->fn_onset) report_step_peaks(out, x, nslot);
+        if (x && x->fn_body && x->fn_onset) report_step_peaks(out, r, x, nslot);
         else if (why[0]) print_wrapped_kv(out, "peak fn over steps", why);
     }
     free(mfn); free(mft); free(fn); free(ft); free(mode); free(sbuf);

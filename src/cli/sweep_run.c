@@ -66,7 +66,10 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
         r->n_slip = cap.n_slip;
         if (w) cd_h5_set_capture(w, &cap);
     }
-    if (w) cd_h5_set_step_peaks(w, sc->model->nslot, ctx->fn_max, ctx->fn_body, ctx->fn_onset, ctx->ft_max);
+    if (w) {
+        cd_h5_step_peaks pk = {ctx->fn_max, ctx->fn_body, ctx->fn_onset, ctx->ft_max, ctx->t_body, ctx->t_onset};
+        cd_h5_set_step_peaks(w, sc->model->nslot, &pk);
+    }
     if (w) {
         cd_error cerr;
         char msg[SW_REASON + 64];
@@ -151,6 +154,8 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
      * (--keep-runs) stores the peaks over steps that capdyn run prints */
     ctx.fn_onset = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
     ctx.fn_body = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    ctx.t_onset = cli_nan_array(sc->model->nslot);
+    ctx.t_body = cli_nan_array(sc->model->nslot);
     ctx.onset = malloc((size_t)(sc->model->nslot ? sc->model->nslot : 1));
     if (ctx.onset) memset(ctx.onset, 1, (size_t)(sc->model->nslot ? sc->model->nslot : 1));
     ctx.t_end = sc->duration;
@@ -161,7 +166,7 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
     ctx.until_verdict = cx->o->until_verdict;
     ctx.ctl = ctl;
     ctx.merit = ctl ? &merit : NULL;
-    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.onset) {
+    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.t_onset || !ctx.t_body || !ctx.onset) {
         r->status = CD_ENOMEM;
         snprintf(r->reason, sizeof r->reason, "out of memory");
         goto out;
@@ -185,6 +190,8 @@ out:
     free(ctx.ft_max);
     free(ctx.fn_onset);
     free(ctx.fn_body);
+    free(ctx.t_onset);
+    free(ctx.t_body);
     free(ctx.onset);
     cd_data_free(d);
     cd_ctrl_free(ctl);

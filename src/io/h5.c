@@ -1152,7 +1152,7 @@ static int create_step_peaks(hid_t gc, int nslot)
         rc = -1;
     for (k = 0; rc == 0 && k < CD_H5_STEP_COUNT; k++) {
         hid_t ds = H5Dcreate2(gc, cd_h5_step_peak_names[k], H5T_IEEE_F64LE, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
-        if (ds < 0 || attr_str(ds, "units", "N") < 0) rc = -1;
+        if (ds < 0 || attr_str(ds, "units", cd_h5_step_peak_units[k]) < 0) rc = -1;
         if (ds >= 0) H5Dclose(ds);
     }
     if (dcpl >= 0) H5Pclose(dcpl);
@@ -1177,12 +1177,11 @@ static int write_step_peaks(cd_h5_writer *w)
     return rc;
 }
 
-void cd_h5_set_step_peaks(cd_h5_writer *w, int nslot, const double *fn_max, const double *fn_body,
-                          const double *fn_onset, const double *ft_max)
+void cd_h5_set_step_peaks(cd_h5_writer *w, int nslot, const cd_h5_step_peaks *p)
 {
     const double *src[CD_H5_STEP_COUNT];
     int k, i;
-    if (!w || nslot != w->nslot || nslot < 1) return;
+    if (!w || !p || nslot != w->nslot || nslot < 1) return;
     if (!w->step_peak) {
         w->step_peak = malloc(sizeof(double) * CD_H5_STEP_COUNT * (size_t)nslot);
         if (!w->step_peak) {
@@ -1190,10 +1189,12 @@ void cd_h5_set_step_peaks(cd_h5_writer *w, int nslot, const double *fn_max, cons
             return;
         }
     }
-    src[CD_H5_STEP_FN_MAX] = fn_max;
-    src[CD_H5_STEP_FN_BODY] = fn_body;
-    src[CD_H5_STEP_FN_ONSET] = fn_onset;
-    src[CD_H5_STEP_FT_MAX] = ft_max;
+    src[CD_H5_STEP_FN_MAX] = p->fn_max;
+    src[CD_H5_STEP_FN_BODY] = p->fn_body;
+    src[CD_H5_STEP_FN_ONSET] = p->fn_onset;
+    src[CD_H5_STEP_FT_MAX] = p->ft_max;
+    src[CD_H5_STEP_T_BODY] = p->t_body;
+    src[CD_H5_STEP_T_ONSET] = p->t_onset;
     for (k = 0; k < CD_H5_STEP_COUNT; k++)
         for (i = 0; i < nslot; i++) w->step_peak[(size_t)k * (size_t)nslot + (size_t)i] = src[k] ? src[k][i] : NAN;
 }
