@@ -237,12 +237,12 @@ static void report_step_peaks(FILE *out, const cd_h5r *r, const cli_run_extra *x
 }
 
 /* The peaks over steps stored in the file (/contacts/fn_step_max ...,
- * h5_schema.h) into fx, pointing into buf (4 nslot, caller frees): 1 if
- * all four are there and finite, else 0 with why (for the line that says
- * they are not stored). */
+ * h5_schema.h) into fx, pointing into buf (CD_H5_STEP_COUNT x nslot,
+ * caller frees): 1 if all are there and the forces finite, else 0 with why
+ * (for the line that says they are not stored). */
 static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, char *why, size_t len)
 {
-    int nslot = r->nslot, k, i, missing = 0, nonfinite = 0;
+    int nslot = r->nslot, k, i, missing = 0, nonfinite = 0, bad = -1;
     double *b = malloc(sizeof(double) * CD_H5_STEP_COUNT * (size_t)(nslot > 0 ? nslot : 1));
     *buf = b;
     memset(fx, 0, sizeof *fx);
@@ -254,17 +254,23 @@ static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, c
         char path[64];
         double *v = b + (size_t)k * (size_t)nslot;
         snprintf(path, sizeof path, "/contacts/%s", cd_h5_step_peak_names[k]);
-        if (cd_h5r_vec(r, path, v, nslot) != 0) missing = 1;
-        else
+        int rc = cd_h5r_vec(r, path, v, nslot);
+        if (rc == -1) missing = 1;
+        else if (rc != 0) {
+            if (bad < 0) bad = k;
+        } else
             for (i = 0; i < nslot && k < CD_H5_STEP_T_BODY; i++) nonfinite |= !isfinite(v[i]); /* times may be NaN */
     }
-    if (missing)
+    if (bad >= 0)
+        snprintf(why, len, "not read (/contacts/%s is not a dataset of %d numbers that reads)",
+                 cd_h5_step_peak_names[bad], nslot);
+    else if (missing)
         snprintf(why, len, "not stored in this file (written by a capdyn from before the peaks over steps were "
                  "kept in results files; capdyn run prints them at its end)");
     else if (nonfinite)
         snprintf(why, len, "not stored in this file (its run did not close it: the peaks over steps are written "
                  "at the end of the run)");
-    if (missing || nonfinite) return 0;
+    if (bad >= 0 || missing || nonfinite) return 0;
     fx->fn_max = b + (size_t)CD_H5_STEP_FN_MAX * (size_t)nslot;
     fx->fn_body = b + (size_t)CD_H5_STEP_FN_BODY * (size_t)nslot;
     fx->fn_onset = b + (size_t)CD_H5_STEP_FN_ONSET * (size_t)nslot;
