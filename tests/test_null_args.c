@@ -160,6 +160,7 @@ Test(null_args, every_public_function_refuses_null_the_documented_way, .timeout 
     CHECK("cd_h5_append(NULL)", einval(cd_h5_append(NULL, m, d, &e), &e, "cd_h5_append"));
     CHECK("cd_h5_flush(NULL)", einval(cd_h5_flush(NULL, &e), &e, "cd_h5_flush"));
     CHECK("cd_h5_set_capture(NULL)", (cd_h5_set_capture(NULL, NULL), 1));
+    CHECK("cd_h5_set_step_peaks(NULL)", (cd_h5_set_step_peaks(NULL, 1, NULL), 1));
     CHECK("cd_h5_close(NULL)", cd_h5_close(NULL, m, d, CD_OK, "", &e) == CD_OK);
 
     cr_expect_eq(g_bad, 0, "%d calls with a NULL argument crashed or did not give the documented result", g_bad);

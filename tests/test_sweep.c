@@ -539,6 +539,122 @@ Test(sweep, a_small_cylinder_that_the_space_gripper_captures_and_tako_only_cages
     rm_rf(dir);
 }
 
+/* issue 22: a caged variant's t_cage (the monitor's: the capture conditions
+ * first held without force closure, docs/capture.md "Verdicts") is in the
+ * summary and its text table, equal to the capdyn run of the same variant,
+ * NaN for a captured one, and kept by --shard and --merge. The frictionless
+ * Space Gripper wrap of tests/test_verdict.c (contact.mu = mu_max = 0) cages
+ * at 0.547 s; with mu_max = 0.5 (the static coefficient; mu = 0) it is
+ * captured at 0.574 s. A kept run (--keep-runs) stores the peaks over steps
+ * of the capdyn run. 1 s runs. */
+Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_and_merge, .timeout = 180)
+{
+    char dir[256], sc[512], full[512], sh[2][512], merged[512], run[512], keep[512], *out = NULL, *err = NULL, *line,
+        *col, *save;
+    double t_run, t0, t1;
+    char verdict[32];
+    hid_t f;
+    int k, ncol, icage = -1, row;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "space_gripper_cylinder.toml");
+    snprintf(full, sizeof full, "%s/full.h5", dir);
+    snprintf(merged, sizeof merged, "%s/merged.h5", dir);
+    snprintf(run, sizeof run, "%s/run.h5", dir);
+#define CAGE_SETS "--set", "simulation.duration=1.0", "--set", "contact.mu=0.0", "--vary", "contact.mu_max=0.0,0.5"
+    snprintf(keep, sizeof keep, "%s/keep", dir);
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, CAGE_SETS, "-j", "1", "-q", "-o", full, "--keep-runs", keep, NULL),
+                 0, "%s", err);
+    free(err);
+    for (k = 0; k < 2; k++) {
+        char which[8];
+        snprintf(sh[k], sizeof sh[k], "%s/shard%d.h5", dir, k + 1);
+        snprintf(which, sizeof which, "%d/2", k + 1);
+        cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, CAGE_SETS, "--shard", which, "-q", "-o", sh[k], NULL), 0,
+                     "%s", err);
+        free(err);
+    }
+#undef CAGE_SETS
+    cr_assert_eq(capdyn(dir, NULL, &err, "sweep", "--merge", sh[1], sh[0], "-o", merged, NULL), 0, "%s", err);
+    free(err);
+    cr_assert_eq(capdyn(dir, NULL, &err, "run", sc, "--set", "simulation.duration=1.0", "--set", "contact.mu=0.0",
+                        "--set", "contact.mu_max=0.0", "-q", "-o", run, NULL),
+                 0, "%s", err);
+    free(err);
+    f = open_ro(run);
+    cr_assert(f >= 0);
+    attr_s(f, "capture_verdict", verdict, sizeof verdict);
+    t_run = attr_d(f, "capture_t");
+    H5Fclose(f);
+    cr_assert_str_eq(verdict, "caged");
+    cr_expect(fabs(t_run - 0.547) < 1.5e-3, "capdyn run: caged at %.17g s", t_run);
+    /* the kept run's file has the peaks over steps of capdyn run's (the same
+     * run: bit for bit) */
+    {
+        static const char *const pk[6] = {"/contacts/fn_step_max", "/contacts/fn_step_body", "/contacts/fn_step_onset",
+                                          "/contacts/ft_step_max", "/contacts/t_fn_step_body",
+                                          "/contacts/t_fn_step_onset"};
+        char kp[600];
+        hid_t fk;
+        snprintf(kp, sizeof kp, "%s/variant_000000.h5", keep);
+        fk = open_ro(kp);
+        f = open_ro(run);
+        cr_assert(fk >= 0 && f >= 0, "%s", kp);
+        for (k = 0; k < 6; k++) {
+            size_t na, nb;
+            double *va = read_all(f, pk[k], &na), *vb = read_all(fk, pk[k], &nb);
+            cr_assert(na == nb && na > 0, "%s: %zu and %zu slots", pk[k], na, nb);
+            cr_expect(memcmp(va, vb, na * sizeof *va) == 0, "%s differs between capdyn run and the kept run", pk[k]);
+            free(va);
+            free(vb);
+        }
+        H5Fclose(fk);
+        H5Fclose(f);
+    }
+
+    f = open_ro(full);
+    cr_assert(f >= 0);
+    cr_assert_eq(attr_ll(f, "format_version"), 3);
+    cr_expect_eq(ds_ll(f, "verdict", 0), CD_VERDICT_CAGED, "mu_max 0: verdict %lld", ds_ll(f, "verdict", 0));
+    cr_expect_eq(ds_ll(f, "verdict", 1), CD_VERDICT_CAPTURED, "mu_max 0.5: verdict %lld", ds_ll(f, "verdict", 1));
+    t0 = ds_d(f, "t_cage", 0);
+    t1 = ds_d(f, "t_cage", 1);
+    cr_expect(t0 == t_run, "t_cage %.17g s in the summary, capdyn run %.17g s", t0, t_run);
+    cr_expect(isnan(ds_d(f, "t_capture", 0)), "the caged variant: t_capture %g", ds_d(f, "t_capture", 0));
+    cr_expect(isnan(t1) && isfinite(ds_d(f, "t_capture", 1)), "the captured variant: t_cage %g, t_capture %g", t1,
+              ds_d(f, "t_capture", 1));
+    H5Fclose(f);
+    f = open_ro(merged);
+    cr_assert(f >= 0);
+    cr_expect(ds_d(f, "t_cage", 0) == t_run && isnan(ds_d(f, "t_cage", 1)), "merged: t_cage %.17g, %g",
+              ds_d(f, "t_cage", 0), ds_d(f, "t_cage", 1));
+    H5Fclose(f);
+    same_summary(full, merged);
+
+    /* the text table: t_cage is the last column, named in the header */
+    cr_assert_eq(capdyn(dir, &out, &err, "sweep", "--table", full, NULL), 0, "%s", err);
+    free(err);
+    row = 0;
+    for (line = strtok_r(out, "\n", &save); line; line = strtok_r(NULL, "\n", &save)) {
+        char *s2, *tok[64];
+        ncol = 0;
+        for (col = strtok_r(line, " ", &s2); col && ncol < 64; col = strtok_r(NULL, " ", &s2)) tok[ncol++] = col;
+        if (ncol > 1 && !strcmp(tok[0], "#") && !strcmp(tok[1], "index")) {
+            cr_assert_str_eq(tok[ncol - 1], "t_cage", "the header ends with %s", tok[ncol - 1]);
+            icage = ncol - 2; /* the rows have no leading '#' */
+        } else if (ncol > 0 && tok[0][0] != '#') {
+            double v;
+            cr_assert(icage > 0 && ncol == icage + 1, "row %d: %d columns, t_cage at %d", row, ncol, icage);
+            v = strtod(tok[icage], NULL);
+            if (row == 0) cr_expect(v == t_run, "table row 0: t_cage '%s', capdyn run %.17g", tok[icage], t_run);
+            else cr_expect_str_eq(tok[icage], "nan", "table row 1: t_cage '%s'", tok[icage]);
+            row++;
+        }
+    }
+    cr_expect_eq(row, 2, "%d rows in the table", row);
+    free(out);
+    rm_rf(dir);
+}
+
 /* Only where capdyn is built with MPI (make MPI=1 test sets CAPDYN_MPI_BIN):
  * the same 5x5 grid under `mpirun -n 2` (rank 0 hands out, rank 1 runs)
  * gives the summary of the serial sweep. */

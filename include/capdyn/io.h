@@ -175,6 +175,22 @@ typedef struct {
     double tau_arm_max;   /* [N m] largest arm joint torque the controller applied, at the samples */
 } cd_h5_capture;
 void cd_h5_set_capture(cd_h5_writer *w, const cd_h5_capture *c);
+/* The peaks of every contact slot over every integrator step of the run
+ * (nslot each, the model's; capdyn run keeps them in its step callback:
+ * docs/cli.md "Peak forces"), written by cd_h5_close as /contacts/fn_step_max,
+ * fn_step_body, fn_step_onset, ft_step_max, t_fn_step_body, t_fn_step_onset
+ * (docs/results-format.md). An array given as NULL is written as NaN. */
+typedef struct {
+    const double *fn_max;   /* [N] the largest normal force, onset transients included */
+    const double *fn_body;  /* [N] the same outside the onset windows ("peak fn over steps") */
+    const double *fn_onset; /* [N] the same inside them ("onset transient"; 0: none) */
+    const double *ft_max;   /* [N] the largest |tangential force| */
+    const double *t_body;   /* [s] when fn_body was reached (NaN: never) */
+    const double *t_onset;  /* [s] when fn_onset was reached (NaN: never) */
+} cd_h5_step_peaks;
+/* Keeps a copy. No-op if w or p is NULL, nslot is not the model's or the
+ * model has no slots. */
+void cd_h5_set_step_peaks(cd_h5_writer *w, int nslot, const cd_h5_step_peaks *p);
 /* Writes the final statistics and run status, flushes and closes; frees w.
  * status/message describe how the run ended. NULL w is a no-op. */
 cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_status run_status,

@@ -850,7 +850,7 @@ world), joint rates; base parts None for a fixed base."""
 class Capture:
     """The capture verdict and figures of merit of a run (verdict.h; the
     root attributes capture_* of a results file, docs/results-format.md)."""
-    _fields = ("verdict", "t", "t_capture", "t_escape", "peak_fn", "peak_tau", "epsilon", "n_stick", "n_slip",
+    _fields = ("verdict", "t", "t_capture", "t_escape", "t_cage", "peak_fn", "peak_tau", "epsilon", "n_stick", "n_slip",
                "offset", "enclosed", "v_rel", "w_rel", "dP", "dL", "base_angle_max", "base_rate_end", "t_trigger",
                "t_rigidise", "v_rel_end", "w_rel_end", "tau_arm_max")
 
@@ -1223,7 +1223,7 @@ class Simulation:
         fc = ffi.new("int *")
         if lib.cd_monitor_quality(mon, self._m, d, eps, fc, _err()) != lib.CD_OK:
             eps[0] = math.nan
-        kw = dict(verdict=v, t_capture=mon.t_capture, t_escape=mon.t_escape,
+        kw = dict(verdict=v, t_capture=mon.t_capture, t_escape=mon.t_escape, t_cage=mon.t_cage,
                   t=mon.t_capture if v == "captured" else mon.t_escape if v == "escaped"
                   else mon.t_cage if v == "caged" else math.nan,
                   peak_fn=mon.peak_fn, peak_tau=mon.peak_tau, epsilon=eps[0], n_stick=mon.n_stick,

@@ -110,6 +110,25 @@ class Results:
             out[f"mode.{k}"] = mode[:, k]
         return out
 
+    _STEP_PEAKS = ("fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max", "t_fn_step_body",
+                   "t_fn_step_onset")
+
+    def step_peaks(self):
+        """The peaks over every integrator step of each slot [N], as capdyn run
+        and capdyn info print them (docs/cli.md, "Peak forces";
+        /contacts/fn_step_max, fn_step_body -- "peak fn over steps" --,
+        fn_step_onset -- "onset transient" --, ft_step_max [N]; t_fn_step_body,
+        t_fn_step_onset: when those were reached [s], NaN for never): a dict
+        of (nslot) arrays, or None when the file does not store them (written
+        before they were, or its run did not close it: NaN forces)."""
+        c = self.file.get("/contacts")
+        if c is None or any(k not in c for k in self._STEP_PEAKS):
+            return None
+        out = {k: np.asarray(c[k][()], dtype=np.float64) for k in self._STEP_PEAKS}
+        if any(not np.all(np.isfinite(out[k])) for k in self._STEP_PEAKS[:4]):
+            return None
+        return out
+
     def slot(self, k):
         """export slot N: t fn ftx fty ftz ft x xdot px py pz nx ny nz vtx vty vtz vt mode."""
         ns = int(self.file.attrs["nslot"])

@@ -57,7 +57,7 @@ def run_variant(value):
     sim = capdyn.Simulation(capdyn.load(HANDRAIL, set=SWEEP_SETS + [f"{SWEEP_KEY}={value}"]))
     r = sim.run(until_verdict=True)
     c = r.capture
-    return dict(verdict=c.verdict, t_capture=c.t_capture, t_escape=c.t_escape, peak_fn=c.peak_fn,
+    return dict(verdict=c.verdict, t_capture=c.t_capture, t_escape=c.t_escape, t_cage=c.t_cage, peak_fn=c.peak_fn,
                 peak_tau=c.peak_tau, epsilon=c.epsilon, n_stick=c.n_stick, n_slip=c.n_slip,
                 fn_step_max=r.fn_step_max, t_final=r.t, stats_rhs=r.nrhs, stats_steps=r.nsteps, events=r.nevents)
 
@@ -78,7 +78,7 @@ def test_sweep_with_multiprocessing_equals_capdyn_sweep(tmp_path, capdyn_bin):
         assert list(f["status"][:]) == [0, 0, 0]
         for i, m in enumerate(mine):
             assert names[int(f["verdict"][i])] == m["verdict"], f"variant {i}"
-            for k in ("t_capture", "t_escape", "peak_fn", "peak_tau", "epsilon", "fn_step_max", "t_final"):
+            for k in ("t_capture", "t_escape", "t_cage", "peak_fn", "peak_tau", "epsilon", "fn_step_max", "t_final"):
                 assert same(float(f[k][i]), m[k]), f"variant {i}: {k} {f[k][i]} vs {m[k]}"
             for k in ("n_stick", "n_slip", "stats_rhs", "stats_steps", "events"):
                 assert int(f[k][i]) == m[k], f"variant {i}: {k}"
@@ -97,8 +97,19 @@ def test_caged_maps_to_its_name_and_time(tmp_path, capdyn_bin):
     res = capdyn.Simulation(capdyn.load(cyl, set=sets)).run()
     with capdyn.Results(str(out)) as r:
         ref = r.capture
+        pk = r.step_peaks()
     cap = res.capture
+    # the peaks over steps the run stored (capdyn info prints them): every
+    # step's force is in the onset window or out of it, and the largest is
+    # the one the Python loop keeps (the same steps)
+    assert pk is not None and set(pk) == {"fn_step_max", "fn_step_body", "fn_step_onset", "ft_step_max",
+                                          "t_fn_step_body", "t_fn_step_onset"}
+    assert np.array_equal(pk["fn_step_max"], np.maximum(pk["fn_step_body"], pk["fn_step_onset"]))
+    assert pk["fn_step_max"].max() == res.fn_step_max
+    assert np.all(pk["ft_step_max"] == 0.0)  # frictionless
     assert cap.verdict == ref["verdict"] == "caged"
     assert not cap.captured
     assert cap.t == ref["t"] and abs(cap.t - 0.547) < 1.5e-3
+    # the monitor's cage time, as capdyn sweep stores it (t_cage); never captured
+    assert cap.t_cage == cap.t and math.isnan(cap.t_capture)
     assert cap.epsilon == ref["epsilon"] == 0.0

@@ -31,6 +31,7 @@ typedef struct {
      * force inside those windows, fn_body outside them (each nslot, may be
      * NULL: not kept), onset (nslot) 1 while a slot is in its window */
     double *fn_onset, *fn_body;
+    double *t_onset, *t_body; /* (nslot, may be NULL) the times [s] those were reached (NaN: never) */
     unsigned char *onset;
     int drawn;
     /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
@@ -61,6 +62,8 @@ void cli_capture_of(const cd_monitor *mon, const cd_ctrl *ctl, const cd_ctrl_mer
                     const cd_data *d, cd_h5_capture *cap);
 
 int cmd_sweep(int argc, char **argv);
+/* n (at least 1) doubles set to NaN, malloc'ed (caller frees); NULL if out of memory */
+double *cli_nan_array(int n);
 
 /* Facts only the running process knows, added to the file's report. */
 typedef struct {
@@ -69,6 +72,7 @@ typedef struct {
     const double *ft_max;       /* (nslot) max |tangential force| over every step [N] */
     const double *fn_onset;     /* (nslot) max normal force inside onset windows [N] (run_ctx), or NULL */
     const double *fn_body;      /* (nslot) max normal force outside them [N], or NULL */
+    const double *t_onset, *t_body; /* (nslot) when those were reached [s] (NaN: never), or NULL */
     int attitude;               /* 1: the scenario's [control] applies base attitude torque (an external torque) */
 } cli_run_extra;
 

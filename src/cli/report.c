@@ -15,6 +15,7 @@
  * relative figure. */
 #define _POSIX_C_SOURCE 200809L
 #include "cli.h"
+#include "../io/h5_schema.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -199,22 +200,35 @@ static void contact_table(FILE *out, const cd_h5r *r, const double *mode, const 
     }
 }
 
-/* a run's peak forces over every step: the physical peak (onset transients
- * excluded), the onset transient apart, the tangential peak */
-static void report_step_peaks(FILE *out, const cli_run_extra *x, int nslot)
+/* "slot K: LABEL) at t = T s" of slot k whose peak was at t[k] (t NULL or
+ * NaN: no time) into buf */
+static void slot_when(const cd_h5r *r, int k, const double *t, char *buf, size_t len)
 {
-    char line[1024];
+    char lab[512];
+    slot_label(r, k, lab, sizeof lab);
+    if (t && isfinite(t[k])) snprintf(buf, len, "slot %d: %s) at t = %.9g s", k, lab, t[k]);
+    else snprintf(buf, len, "slot %d: %s)", k, lab);
+}
+
+/* a run's peak forces over every step: the physical peak (onset transients
+ * excluded), the onset transient apart, the tangential peak; each with its
+ * slot and, for the normal force, its time */
+static void report_step_peaks(FILE *out, const cd_h5r *r, const cli_run_extra *x, int nslot)
+{
+    char line[1024], where[700];
     int k, kb = 0, ko = 0, kt = 0;
     for (k = 0; k < nslot; k++) {
         if (x->fn_body[k] > x->fn_body[kb]) kb = k;
         if (x->fn_onset[k] > x->fn_onset[ko]) ko = k;
         if (x->ft_max[k] > x->ft_max[kt]) kt = k;
     }
-    snprintf(line, sizeof line, "%.6g N (slot %d), onset transients excluded", x->fn_body[kb], kb);
+    slot_when(r, kb, x->t_body, where, sizeof where);
+    snprintf(line, sizeof line, "%.6g N (%s, onset transients excluded", x->fn_body[kb], where);
     print_wrapped_kv(out, "peak fn over steps", line);
+    slot_when(r, ko, x->t_onset, where, sizeof where);
     if (x->fn_onset[ko] > 0)
-        snprintf(line, sizeof line, "%.6g N (slot %d): the largest force while the damper term exceeded the "
-                 "elastic term just after a contact closed", x->fn_onset[ko], ko);
+        snprintf(line, sizeof line, "%.6g N (%s: the largest force while the damper term exceeded the "
+                 "elastic term just after a contact closed", x->fn_onset[ko], where);
     else
         snprintf(line, sizeof line, "none (no contact closed with its damper term above its elastic term)");
     print_wrapped_kv(out, "onset transient", line);
@@ -222,12 +236,60 @@ static void report_step_peaks(FILE *out, const cli_run_extra *x, int nslot)
     print_wrapped_kv(out, "peak |ft| over steps", line);
 }
 
+/* The peaks over steps stored in the file (/contacts/fn_step_max ...,
+ * h5_schema.h) into fx, pointing into buf (CD_H5_STEP_COUNT x nslot,
+ * caller frees): 1 if all are there and the forces finite, else 0 with why
+ * (for the line that says they are not stored). */
+static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, char *why, size_t len)
+{
+    int nslot = r->nslot, k, i, missing = 0, nonfinite = 0, bad = -1;
+    double *b = malloc(sizeof(double) * CD_H5_STEP_COUNT * (size_t)(nslot > 0 ? nslot : 1));
+    *buf = b;
+    memset(fx, 0, sizeof *fx);
+    if (!b) {
+        snprintf(why, len, "not read (out of memory)");
+        return 0;
+    }
+    for (k = 0; k < CD_H5_STEP_COUNT; k++) {
+        char path[64];
+        double *v = b + (size_t)k * (size_t)nslot;
+        snprintf(path, sizeof path, "/contacts/%s", cd_h5_step_peak_names[k]);
+        int rc = cd_h5r_vec(r, path, v, nslot);
+        if (rc == -1) missing = 1;
+        else if (rc != 0) {
+            if (bad < 0) bad = k;
+        } else
+            for (i = 0; i < nslot && k < CD_H5_STEP_T_BODY; i++) nonfinite |= !isfinite(v[i]); /* times may be NaN */
+    }
+    if (bad >= 0)
+        snprintf(why, len, "not read (/contacts/%s is not a dataset of %d numbers that reads)",
+                 cd_h5_step_peak_names[bad], nslot);
+    else if (missing)
+        snprintf(why, len, "not stored in this file (written by a capdyn from before the peaks over steps were "
+                 "kept in results files; capdyn run prints them at its end)");
+    else if (nonfinite)
+        snprintf(why, len, "not stored in this file (its run did not close it: the peaks over steps are written "
+                 "at the end of the run)");
+    if (bad >= 0 || missing || nonfinite) return 0;
+    fx->fn_max = b + (size_t)CD_H5_STEP_FN_MAX * (size_t)nslot;
+    fx->fn_body = b + (size_t)CD_H5_STEP_FN_BODY * (size_t)nslot;
+    fx->fn_onset = b + (size_t)CD_H5_STEP_FN_ONSET * (size_t)nslot;
+    fx->ft_max = b + (size_t)CD_H5_STEP_FT_MAX * (size_t)nslot;
+    fx->t_body = b + (size_t)CD_H5_STEP_T_BODY * (size_t)nslot;
+    fx->t_onset = b + (size_t)CD_H5_STEP_T_ONSET * (size_t)nslot;
+    return 1;
+}
+
+/* The contacts: slots that closed with their peaks at the samples and, from
+ * a run's x or else from the file, over every step (the same lines in
+ * capdyn run and capdyn info). */
 static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
 {
     int nslot = r->nslot, nclosed = 0, kfn = 0, kft = 0;
-    double *fn = NULL, *ft = NULL, *mode = NULL, *mfn, *mft;
+    double *fn = NULL, *ft = NULL, *mode = NULL, *mfn, *mft, *sbuf = NULL;
     cd_error err;
-    char line[1024];
+    char line[1024], why[256] = "";
+    cli_run_extra fx;
 
     if (nslot > 0) {
         fn = cd_h5r_series(r, "/contacts/fn", NULL, &err);
@@ -239,6 +301,7 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
         free(fn); free(ft); free(mode);
         return;
     }
+    if (!(x && x->fn_body && x->fn_onset) && stored_step_peaks(r, &fx, &sbuf, why, sizeof why)) x = &fx;
     mfn = calloc((size_t)nslot, sizeof *mfn);
     mft = calloc((size_t)nslot, sizeof *mft);
     if (mfn && mft) nclosed = contact_maxima(r, fn, ft, mode, x, mfn, mft, &kfn, &kft);
@@ -250,9 +313,10 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
         snprintf(line, sizeof line, "%.6g N (slot %d), onset transients included; peak |ft| at samples %.6g N (slot %d)",
                  mfn[kfn], kfn, mft[kft], kft);
         print_wrapped_kv(out, "peak fn at samples", line);
-        if (x && x->fn_body && x->fn_onset) report_step_peaks(out, x, nslot);
+        if (x && x->fn_body && x->fn_onset) report_step_peaks(out, r, x, nslot);
+        else if (why[0]) print_wrapped_kv(out, "peak fn over steps", why);
     }
-    free(mfn); free(mft); free(fn); free(ft); free(mode);
+    free(mfn); free(mft); free(fn); free(ft); free(mode); free(sbuf);
 }
 
 /* ---- the capture verdict (scenarios with a gripper and an object) ---- */

@@ -136,11 +136,25 @@ static void onset_step(const cd_model *m, const cd_data *d, run_ctx *c, int k)
     }
     el = d->slot_x[k] > 0 ? L->K * pow(d->slot_x[k], L->p) : 0.0;
     if (c->onset[k] && d->slot_fnraw[k] - el > el) {
-        if (fn > c->fn_onset[k]) c->fn_onset[k] = fn;
+        if (fn > c->fn_onset[k]) {
+            c->fn_onset[k] = fn;
+            if (c->t_onset) c->t_onset[k] = d->t;
+        }
         return;
     }
     c->onset[k] = 0;
-    if (fn > c->fn_body[k]) c->fn_body[k] = fn;
+    if (fn > c->fn_body[k]) {
+        c->fn_body[k] = fn;
+        if (c->t_body) c->t_body[k] = d->t;
+    }
+}
+
+double *cli_nan_array(int n)
+{
+    double *v = malloc(sizeof(double) * (size_t)(n > 0 ? n : 1));
+    int i;
+    for (i = 0; v && i < (n > 0 ? n : 1); i++) v[i] = NAN;
+    return v;
 }
 
 static int step_cb(const cd_model *m, cd_data *d, void *user)
@@ -554,6 +568,8 @@ static void run_report(const run_opts *o, const char *out, const run_ctx *ctx, c
             x.ft_max = ctx->ft_max;
             x.fn_onset = ctx->fn_onset;
             x.fn_body = ctx->fn_body;
+            x.t_onset = ctx->t_onset;
+            x.t_body = ctx->t_body;
             x.attitude = attitude;
             cli_report(stdout, r, out, &x);
             cd_h5r_close(r);
@@ -679,6 +695,8 @@ int cmd_run(int argc, char **argv)
     ctx.ft_max = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
     ctx.fn_onset = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
     ctx.fn_body = calloc((size_t)(m->nslot ? m->nslot : 1), sizeof(double));
+    ctx.t_onset = cli_nan_array(m->nslot);
+    ctx.t_body = cli_nan_array(m->nslot);
     ctx.onset = malloc((size_t)(m->nslot ? m->nslot : 1));
     if (ctx.onset) memset(ctx.onset, 1, (size_t)(m->nslot ? m->nslot : 1));
     ctx.t_end = sc->duration;
@@ -687,7 +705,7 @@ int cmd_run(int argc, char **argv)
     ctx.progress = !o.quiet && isatty(STDERR_FILENO);
     ctx.max_wall = sc->max_wall_time;
     ctx.max_rhs = sc->max_rhs_evals;
-    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.onset) {
+    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.t_onset || !ctx.t_body || !ctx.onset) {
         cli_error("out of memory");
         cd_h5_close(w, m, d, CD_ENOMEM, "out of memory", NULL);
         restore_signals(&old_int, &old_term, &old_xfsz, &old_mask);
@@ -695,6 +713,10 @@ int cmd_run(int argc, char **argv)
         free(ctx.ft_max);
         free(ctx.fn_onset);
         free(ctx.fn_body);
+    free(ctx.t_onset);
+    free(ctx.t_body);
+        free(ctx.t_onset);
+        free(ctx.t_body);
         free(ctx.onset);
         cd_data_free(d);
         cd_ctrl_free(ctl);
@@ -725,6 +747,12 @@ int cmd_run(int argc, char **argv)
         cd_h5_capture cap;
         cli_capture_of(&mon, ctl, ctl ? &merit : NULL, m, d, &cap);
         cd_h5_set_capture(w, &cap);
+    }
+    /* the peaks over steps go into the file too, so that capdyn info prints
+     * the lines this run prints (docs/cli.md, "Peak forces") */
+    {
+        cd_h5_step_peaks pk = {ctx.fn_max, ctx.fn_body, ctx.fn_onset, ctx.ft_max, ctx.t_body, ctx.t_onset};
+        cd_h5_set_step_peaks(w, m->nslot, &pk);
     }
     cst = cd_h5_close(w, m, d, st, msg, &werr);
     if (cst != CD_OK && !wmsg[0]) snprintf(wmsg, sizeof wmsg, "%s", werr.msg);

@@ -69,6 +69,8 @@ typedef struct {
     int status;               /* cd_status of the run (0 ok), SW_ELOAD, SW_ECRASH, SW_NOT_RUN */
     int verdict;              /* cd_verdict, -1 none (no gripper, or not run) */
     double t_capture, t_escape; /* [s] NaN if never */
+    double t_cage;            /* [s] the monitor's t_cage: the capture conditions first held without force
+                               * closure (NaN if never caged; summaries before format_version 3 lack it) */
     double peak_fn;           /* [N] the monitor's, on the object at the samples */
     double peak_tau;          /* [N m] */
     double epsilon;           /* Ferrari-Canny epsilon of the final contacts */

@@ -34,7 +34,7 @@
 #include <unistd.h>
 
 #define SW_FORMAT "capdyn-sweep"
-#define SW_FORMAT_VERSION 2 /* 2: checksums (1: none, still read) */
+#define SW_FORMAT_VERSION 3 /* 3: t_cage; 2: checksums (1: none); older ones still read */
 
 void sw_result_blank(sw_result *r, long index)
 {
@@ -42,7 +42,7 @@ void sw_result_blank(sw_result *r, long index)
     r->index = index;
     r->status = SW_NOT_RUN;
     r->verdict = -1;
-    r->t_capture = r->t_escape = r->peak_fn = r->peak_tau = r->epsilon = NAN;
+    r->t_capture = r->t_escape = r->t_cage = r->peak_fn = r->peak_tau = r->epsilon = NAN;
     r->offset[0] = r->offset[1] = r->offset[2] = NAN;
     r->fn_step_max = r->t_final = r->wall = NAN;
     r->nrhs = r->nsteps = r->nevents = -1;
@@ -172,27 +172,30 @@ static hid_t group(hid_t loc, const char *name)
 }
 
 /* The result columns, shared by the writer and the reader: name, field,
- * units (NULL: none). */
+ * units (NULL: none), the first format_version that has it (0: all). A
+ * summary older than a column's version has no such dataset: it reads as
+ * NaN and is left out of the checksum, as it was when written. */
 typedef struct {
     const char *name;
     size_t off;
     const char *units;
+    int since;
 } sw_col;
 static const sw_col dcols[] = {
-    {"t_capture", offsetof(sw_result, t_capture), "s"}, {"t_escape", offsetof(sw_result, t_escape), "s"},
-    {"peak_fn", offsetof(sw_result, peak_fn), "N"},     {"peak_tau", offsetof(sw_result, peak_tau), "N m"},
-    {"epsilon", offsetof(sw_result, epsilon), NULL},    {"fn_step_max", offsetof(sw_result, fn_step_max), "N"},
-    {"t_final", offsetof(sw_result, t_final), "s"},
+    {"t_capture", offsetof(sw_result, t_capture), "s", 0}, {"t_escape", offsetof(sw_result, t_escape), "s", 0},
+    {"peak_fn", offsetof(sw_result, peak_fn), "N", 0},     {"peak_tau", offsetof(sw_result, peak_tau), "N m", 0},
+    {"epsilon", offsetof(sw_result, epsilon), NULL, 0},    {"fn_step_max", offsetof(sw_result, fn_step_max), "N", 0},
+    {"t_final", offsetof(sw_result, t_final), "s", 0},       {"t_cage", offsetof(sw_result, t_cage), "s", 3},
 };
 /* integer columns: int fields (4 bytes) stored as int32, long fields as int64 */
 static const sw_col icols[] = {
-    {"status", offsetof(sw_result, status), NULL},  {"verdict", offsetof(sw_result, verdict), NULL},
-    {"n_stick", offsetof(sw_result, n_stick), NULL}, {"n_slip", offsetof(sw_result, n_slip), NULL},
+    {"status", offsetof(sw_result, status), NULL, 0},  {"verdict", offsetof(sw_result, verdict), NULL, 0},
+    {"n_stick", offsetof(sw_result, n_stick), NULL, 0}, {"n_slip", offsetof(sw_result, n_slip), NULL, 0},
 };
 static const sw_col lcols[] = {
-    {"stats_rhs", offsetof(sw_result, nrhs), NULL},
-    {"stats_steps", offsetof(sw_result, nsteps), NULL},
-    {"events", offsetof(sw_result, nevents), NULL},
+    {"stats_rhs", offsetof(sw_result, nrhs), NULL, 0},
+    {"stats_steps", offsetof(sw_result, nsteps), NULL, 0},
+    {"events", offsetof(sw_result, nevents), NULL, 0},
 };
 #define NCOL(a) (sizeof a / sizeof a[0])
 
@@ -766,6 +769,7 @@ static void digest(const sw_summary *s, unsigned long long *h, unsigned long lon
         }
     }
     for (c = 0; c < NCOL(dcols); c++) {
+        if (s->version < dcols[c].since) continue;
         dg_str(h, dcols[c].name);
         for (i = 0; i < n; i++) dg_bytes(h, (const char *)&s->res[i] + dcols[c].off, 8);
     }
@@ -852,6 +856,7 @@ static int load_body(hid_t f, const char *path, sw_summary *s, char *msg, size_t
     for (c = 0; c < NCOL(icols) + NCOL(lcols) + NCOL(dcols); c++) {
         int isd = c >= NCOL(icols) + NCOL(lcols), isl = !isd && c >= NCOL(icols);
         const sw_col *col = isd ? &dcols[c - NCOL(icols) - NCOL(lcols)] : isl ? &lcols[c - NCOL(icols)] : &icols[c];
+        if (s->version < col->since) continue; /* not in this summary: NaN (sw_result_blank) */
         if (read_ds(f, col->name, isd ? H5T_NATIVE_DOUBLE : H5T_NATIVE_LLONG, n, 0, isd ? (void *)dbuf : (void *)lbuf))
             BAD("'%s': cannot read the dataset '%s' (damaged file)", path, col->name);
         for (i = 0; i < n; i++) {

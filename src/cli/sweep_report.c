@@ -155,7 +155,7 @@ static void print_table(const sw_summary *s, const char *path, FILE *out)
     fputs("# index", out);
     for (k = 0; k < nk; k++) fprintf(out, " %s", s->names[k]);
     for (k = 0; k < nk; k++) fprintf(out, " %s_norm", s->names[k]);
-    fputs(" verdict status t_capture t_escape peak_fn peak_tau epsilon fn_step_max t_final\n", out);
+    fputs(" verdict status t_capture t_escape peak_fn peak_tau epsilon fn_step_max t_final t_cage\n", out);
     fputs("# verdict: 0 unresolved, 1 captured, 2 escaped, 3 caged, -1 none; status: 0 ok, -1 not run, else failed\n", out);
     for (i = 0; i < n; i++) {
         const sw_result *r = &s->res[i];
@@ -172,9 +172,10 @@ static void print_table(const sw_summary *s, const char *path, FILE *out)
         }
         fprintf(out, " %d %d", r->verdict, r->status);
         {
-            const double col[7] = {r->t_capture, r->t_escape, r->peak_fn, r->peak_tau, r->epsilon, r->fn_step_max,
-                                   r->t_final};
-            for (c = 0; c < 7; c++) {
+            /* t_cage last: scripts read the columns before it by number (plots/) */
+            const double col[8] = {r->t_capture, r->t_escape, r->peak_fn, r->peak_tau, r->epsilon, r->fn_step_max,
+                                   r->t_final, r->t_cage};
+            for (c = 0; c < 8; c++) {
                 fputc(' ', out);
                 cli_put_num(out, col[c]);
             }

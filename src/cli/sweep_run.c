@@ -57,6 +57,7 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
         r->verdict = (int)mon->verdict;
         r->t_capture = mon->t_capture;
         r->t_escape = mon->t_escape;
+        r->t_cage = mon->t_cage;
         r->peak_fn = cap.peak_fn;
         r->peak_tau = cap.peak_tau;
         r->epsilon = cap.epsilon;
@@ -64,6 +65,10 @@ static void variant_outcome(const sw_ctx *cx, cd_scenario *sc, cd_data *d, cd_h5
         r->n_stick = cap.n_stick;
         r->n_slip = cap.n_slip;
         if (w) cd_h5_set_capture(w, &cap);
+    }
+    if (w) {
+        cd_h5_step_peaks pk = {ctx->fn_max, ctx->fn_body, ctx->fn_onset, ctx->ft_max, ctx->t_body, ctx->t_onset};
+        cd_h5_set_step_peaks(w, sc->model->nslot, &pk);
     }
     if (w) {
         cd_error cerr;
@@ -145,6 +150,14 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
     }
     ctx.fn_max = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
     ctx.ft_max = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    /* the onset transients apart (cli.h), as capdyn run: a kept run's file
+     * (--keep-runs) stores the peaks over steps that capdyn run prints */
+    ctx.fn_onset = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    ctx.fn_body = calloc((size_t)(sc->model->nslot ? sc->model->nslot : 1), sizeof(double));
+    ctx.t_onset = cli_nan_array(sc->model->nslot);
+    ctx.t_body = cli_nan_array(sc->model->nslot);
+    ctx.onset = malloc((size_t)(sc->model->nslot ? sc->model->nslot : 1));
+    if (ctx.onset) memset(ctx.onset, 1, (size_t)(sc->model->nslot ? sc->model->nslot : 1));
     ctx.t_end = sc->duration;
     ctx.wall0 = t0;
     ctx.last_draw = -1e300;
@@ -153,7 +166,7 @@ void sw_run_variant(const sw_ctx *cx, long idx, sw_result *r)
     ctx.until_verdict = cx->o->until_verdict;
     ctx.ctl = ctl;
     ctx.merit = ctl ? &merit : NULL;
-    if (!ctx.fn_max || !ctx.ft_max) {
+    if (!ctx.fn_max || !ctx.ft_max || !ctx.fn_onset || !ctx.fn_body || !ctx.t_onset || !ctx.t_body || !ctx.onset) {
         r->status = CD_ENOMEM;
         snprintf(r->reason, sizeof r->reason, "out of memory");
         goto out;
@@ -175,6 +188,11 @@ out:
     if (w) cd_h5_close(w, sc->model, d, (cd_status)r->status, r->reason, NULL);
     free(ctx.fn_max);
     free(ctx.ft_max);
+    free(ctx.fn_onset);
+    free(ctx.fn_body);
+    free(ctx.t_onset);
+    free(ctx.t_body);
+    free(ctx.onset);
     cd_data_free(d);
     cd_ctrl_free(ctl);
     cd_scenario_free(sc);

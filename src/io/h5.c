@@ -146,6 +146,7 @@ struct cd_h5_writer {
     int has_control;               /* ... and the [control] figures of merit (docs/capture.md) */
     cd_h5_capture capture;
     char capture_verdict[16];
+    double *step_peak;            /* CD_H5_STEP_COUNT x nslot (cd_h5_set_step_peaks), NULL until given */
     int nsys, nbody, nslot, ny;   /* of the model the file was created for */
     h5_series *ser;
     int nser, capser;
@@ -1045,6 +1046,7 @@ static void writer_free(cd_h5_writer *w)
     free(w->ser);
     free(w->s_sys);
     free(w->evbuf);
+    free(w->step_peak);
     if (w->ev_dset >= 0) H5Dclose(w->ev_dset);
     if (w->ev_mtype >= 0) H5Tclose(w->ev_mtype);
     if (w->ev_ftype >= 0) H5Tclose(w->ev_ftype);
@@ -1136,6 +1138,67 @@ static int add_group_series(cd_h5_writer *w, hid_t loc, cd_h5_group g, const cd_
     return 0;
 }
 
+/* The (nslot) datasets of the peaks over steps (h5_schema.h): contiguous
+ * and allocated now, NaN, so that cd_h5_close only rewrites their bytes in
+ * place (rule 3 at the top of this file). */
+static int create_step_peaks(hid_t gc, int nslot)
+{
+    hsize_t dim = (hsize_t)nslot;
+    double nan = NAN;
+    hid_t sp = H5Screate_simple(1, &dim, NULL), dcpl = H5Pcreate(H5P_DATASET_CREATE);
+    int k, rc = 0;
+    if (sp < 0 || dcpl < 0 || H5Pset_alloc_time(dcpl, H5D_ALLOC_TIME_EARLY) < 0 ||
+        H5Pset_fill_time(dcpl, H5D_FILL_TIME_ALLOC) < 0 || H5Pset_fill_value(dcpl, H5T_NATIVE_DOUBLE, &nan) < 0)
+        rc = -1;
+    for (k = 0; rc == 0 && k < CD_H5_STEP_COUNT; k++) {
+        hid_t ds = H5Dcreate2(gc, cd_h5_step_peak_names[k], H5T_IEEE_F64LE, sp, H5P_DEFAULT, dcpl, H5P_DEFAULT);
+        if (ds < 0 || attr_str(ds, "units", cd_h5_step_peak_units[k]) < 0) rc = -1;
+        if (ds >= 0) H5Dclose(ds);
+    }
+    if (dcpl >= 0) H5Pclose(dcpl);
+    if (sp >= 0) H5Sclose(sp);
+    return rc;
+}
+
+/* the peaks over steps given by the run, in place */
+static int write_step_peaks(cd_h5_writer *w)
+{
+    int k, rc = 0;
+    for (k = 0; k < CD_H5_STEP_COUNT; k++) {
+        char path[64];
+        hid_t ds;
+        snprintf(path, sizeof path, "/contacts/%s", cd_h5_step_peak_names[k]);
+        ds = H5Dopen2(w->file, path, H5P_DEFAULT);
+        if (ds < 0 || H5Dwrite(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT,
+                               w->step_peak + (size_t)k * (size_t)w->nslot) < 0)
+            rc = -1;
+        if (ds >= 0) H5Dclose(ds);
+    }
+    return rc;
+}
+
+void cd_h5_set_step_peaks(cd_h5_writer *w, int nslot, const cd_h5_step_peaks *p)
+{
+    const double *src[CD_H5_STEP_COUNT];
+    int k, i;
+    if (!w || !p || nslot != w->nslot || nslot < 1) return;
+    if (!w->step_peak) {
+        w->step_peak = malloc(sizeof(double) * CD_H5_STEP_COUNT * (size_t)nslot);
+        if (!w->step_peak) {
+            w->oom = 1;
+            return;
+        }
+    }
+    src[CD_H5_STEP_FN_MAX] = p->fn_max;
+    src[CD_H5_STEP_FN_BODY] = p->fn_body;
+    src[CD_H5_STEP_FN_ONSET] = p->fn_onset;
+    src[CD_H5_STEP_FT_MAX] = p->ft_max;
+    src[CD_H5_STEP_T_BODY] = p->t_body;
+    src[CD_H5_STEP_T_ONSET] = p->t_onset;
+    for (k = 0; k < CD_H5_STEP_COUNT; k++)
+        for (i = 0; i < nslot; i++) w->step_peak[(size_t)k * (size_t)nslot + (size_t)i] = src[k] ? src[k][i] : NAN;
+}
+
 static int create_layout(cd_h5_writer *w, const cd_model *m)
 {
     hid_t g, gs, gc, gd;
@@ -1187,6 +1250,7 @@ static int create_layout(cd_h5_writer *w, const cd_model *m)
     }
     if (write_slot_table(gc, m) < 0) ok = 0;
     if (ok && m->nslot > 0 && add_group_series(w, gc, CD_G_CONTACTS, m, 0, 0, w->s) < 0) ok = 0;
+    if (ok && m->nslot > 0 && create_step_peaks(gc, m->nslot) < 0) ok = 0;
     H5Gclose(gc);
     if (!ok) return -1;
     /* events */
@@ -1804,6 +1868,7 @@ cd_status cd_h5_close(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_s
     if (!w->failed && (!w->stopped || check_space(w, 65536.0, tmp.msg, sizeof tmp.msg) == 0)) {
         if (d) rc |= write_closing_attrs(f, d);
         if (w->has_capture && w->capture_set) rc |= write_capture_attrs(f, &w->capture, w->has_control);
+        if (w->step_peak) rc |= write_step_peaks(w);
         if (!d) {
             char when[CD_H5_UTC_LEN];
             utc_now(when, sizeof when);

@@ -124,6 +124,30 @@ int cd_h5r_exists(const cd_h5r *r, const char *path)
     return e > 0;
 }
 
+int cd_h5r_vec(const cd_h5r *r, const char *path, double *v, long n)
+{
+    cd_h5_quiet q;
+    hid_t ds, sp;
+    int rc = -1;
+    if (!cd_h5r_exists(r, path)) return -1;
+    cd_h5_quiet_begin(&q);
+    ds = H5Dopen2(FID(r), path, H5P_DEFAULT);
+    if (ds >= 0) {
+        hsize_t dim = 0;
+        sp = H5Dget_space(ds);
+        rc = -2;
+        if (sp >= 0 && H5Sget_simple_extent_ndims(sp) == 1 && H5Sget_simple_extent_dims(sp, &dim, NULL) == 1 &&
+            dim == (hsize_t)n && n > 0 && H5Dread(ds, H5T_NATIVE_DOUBLE, H5S_ALL, H5S_ALL, H5P_DEFAULT, v) >= 0)
+            rc = 0;
+        if (sp >= 0) H5Sclose(sp);
+        H5Dclose(ds);
+    } else {
+        rc = -2;
+    }
+    cd_h5_quiet_end(&q);
+    return rc;
+}
+
 /* 1 if the attribute holds one element (strings are written as scalars) */
 static int attr_is_scalar(hid_t a)
 {

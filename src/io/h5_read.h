@@ -76,6 +76,10 @@ int cd_h5r_exists(const cd_h5r *r, const char *path);
  * if missing, or if its shape or type is not what the schema
  * (src/io/h5_schema.h) and the model tables say. */
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err);
+/* A one-dimensional dataset of n elements (e.g. the (nslot) peaks over
+ * steps, h5_schema.h) as doubles into v: 0; -1 if it does not exist; -2 if
+ * its shape is not (n) or it does not read. */
+int cd_h5r_vec(const cd_h5r *r, const char *path, double *v, long n);
 /* Attributes of an object ("/" for the file). The string is malloc'ed
  * (caller frees); NULL if missing. The numeric readers return 0 on success,
  * -1 if missing. cd_h5r_text follows the "@dataset /name" indirection used

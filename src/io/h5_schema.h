@@ -155,4 +155,29 @@ static inline long cd_h5_shape_rowlen(cd_h5_shape sh, long nsys, long nslot, lon
     return nt == 0 ? 1 : nt == 1 ? t0 : t0 * t1;
 }
 
+/* The peaks over every integrator step of each contact slot (not only at
+ * the samples: docs/cli.md "Peak forces"), four (nslot) float64 datasets in
+ * /contacts. Created with the layout (contiguous, allocated at
+ * once, NaN) and written in place by cd_h5_close when the run gave them
+ * (cd_h5_set_step_peaks): NaN in a file whose run was killed. Files from
+ * before them have no such datasets. */
+enum {
+    CD_H5_STEP_FN_MAX = 0,
+    CD_H5_STEP_FN_BODY,
+    CD_H5_STEP_FN_ONSET,
+    CD_H5_STEP_FT_MAX,
+    CD_H5_STEP_T_BODY,
+    CD_H5_STEP_T_ONSET,
+    CD_H5_STEP_COUNT
+};
+static const char *const cd_h5_step_peak_names[CD_H5_STEP_COUNT] = {
+    "fn_step_max",     /* [N] the largest normal force over every step, onset transients included */
+    "fn_step_body",    /* [N] the same outside the onset windows: "peak fn over steps" */
+    "fn_step_onset",   /* [N] the same inside them: "onset transient" (0: none) */
+    "ft_step_max",     /* [N] the largest |tangential force| over every step */
+    "t_fn_step_body",  /* [s] when fn_step_body was reached (NaN: never) */
+    "t_fn_step_onset", /* [s] when fn_step_onset was reached (NaN: never) */
+};
+static const char *const cd_h5_step_peak_units[CD_H5_STEP_COUNT] = {"N", "N", "N", "N", "s", "s"};
+
 #endif
