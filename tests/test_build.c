@@ -756,7 +756,25 @@ Test(build, shipped_capture_scenario_equals_the_c_build)
     /* [contact]: the paper's rule, mu_max 0.5, mu 0.4 */
     law.K = rule.K; law.D = rule.D; law.Kt = law.K; law.Dt = law.D;
     law.mu_s = 0.5; law.mu_k = 0.4;
-    cr_assert_eq(cd_build_hand_drive(m, &h, &hand, &law, &tgt, 1, &err), CD_OK, "%s", err.msg);
+    {
+        /* [gripper] finger_contact: Hunt-Crossley on the finger-on-finger
+         * pairs (check points on a finger, the shape another finger of the
+         * hand), K 1e4, D 7.37e4, D_t 63.25; the pairs against the target
+         * keep [contact]'s law */
+        cd_contact_law ff = law;
+        int p0 = m->npair, p, lid, nff = 0;
+        cr_assert_eq(cd_build_hand_drive(m, &h, &hand, &law, &tgt, 1, &err), CD_OK, "%s", err.msg);
+        ff.damping = CD_DAMP_HUNT_CROSSLEY;
+        ff.K = 1e4; ff.D = 7.37e4; ff.Kt = ff.K; ff.Dt = 63.25;
+        lid = cd_model_add_law(m, &ff, &err);
+        cr_assert(lid >= 0, "%s", err.msg);
+        for (p = p0; p < m->npair; p++)
+            if (m->pair_body[p] >= 0 && m->body_sys[m->shape_body[m->pair_shape[p]]] == hand.sys) {
+                m->pair_law[p] = lid;
+                nff++;
+            }
+        cr_assert_gt(nff, 0, "the two finger pairs can touch each other");
+    }
     cr_assert_eq(cd_model_set_user_switches(m, 2, &err), CD_OK, "%s", err.msg); /* the controller's (detumble off) */
     cr_assert_eq(cd_model_finalize(m, &err), CD_OK, "%s", err.msg);
     cr_expect_eq(model_diff(m, sc->model), 0, "%d entries differ", bad);

@@ -154,13 +154,13 @@ Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_on
 }
 
 /* The caged verdict in the texts: `capdyn run` and `capdyn info` of the
- * frictionless Space Gripper wrap (test_verdict.c: caged at 0.547 s, no force
+ * frictionless Space Gripper wrap (test_verdict.c: caged at 0.672 s, no force
  * closure), the sweep line counting it apart from captured, and the table's
  * verdict code 3. */
 Test(verdict_report, run_info_and_sweep_name_the_cage, .timeout = 120)
 {
     char dir[64], sc[512], h5[256], sw[256], *out = NULL, *err = NULL, *iout = NULL, *sout = NULL, *tab = NULL;
-    const char *line = "capture     caged at t = 0.547 s\n";
+    const char *line = "capture     caged at t = 0.672 s\n";
     make_tmpdir(dir, sizeof dir);
     scen(sc, sizeof sc, "space_gripper_cylinder.toml");
     snprintf(h5, sizeof h5, "%s/cage.h5", dir);
@@ -242,7 +242,8 @@ static void read_vec(hid_t f, const char *path, double *v, int n)
 }
 
 /* The frictionless Space Gripper wrap of tests/test_verdict.c (caged at
- * 0.547 s, 1 s): 100 slots, onset transients on the linear law. capdyn info
+ * 0.672 s, 1 s): 100 slots; onset transients on the hand x cylinder pairs'
+ * linear law, and the finger pairs' (Hunt-Crossley) impact forces. capdyn info
  * of its file prints every line of the run's summary, the contact table
  * with its over-steps columns and the peak lines included, except the wall
  * time; in the file each slot's fn_step_max is the larger of its body and

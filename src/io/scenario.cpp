@@ -1932,8 +1932,28 @@ struct Builder {
         std::vector<int> targets;
         for (auto &s2 : sys)
             if (s2.is_target) targets.push_back(s2.id);
+        int pair0 = m->npair;
         if (cd_build_hand_drive(m.get(), &h, &grip.hand, &def.law, targets.data(), (int)targets.size(), &err) != CD_OK)
             builder_fail(t.n->loc, t.path);
+        /* finger_contact: the law of the finger-on-finger pairs (a finger's
+         * check points against another finger's link of this hand), on top
+         * of [contact]; the pairs against the targets keep [contact]'s law.
+         * A [[pair]] cannot set it: the hand's pairs come first and a later
+         * pair repeating a slot does not change its law. */
+        if (Entry *e = t.get("finger_contact")) {
+            std::string fp = t.kp("finger_contact");
+            Tab ft(table_of(*e->val, fp), fp, LAW_KEYS);
+            LawState ls = law(ft, def);
+            int lid = cd_model_add_law(m.get(), &ls.law, &err), nff = 0;
+            if (lid < 0) builder_fail(e->val->loc, fp);
+            for (int p = pair0; p < m->npair; p++)
+                if (m->pair_body[p] >= 0 && m->pair_sys[p] == grip.hand.sys && m->body_sys[m->shape_body[m->pair_shape[p]]] == grip.hand.sys) {
+                    m->pair_law[p] = lid;
+                    nff++;
+                }
+            if (nff == 0)
+                fail_at(e->kloc, fp, "does not apply to this hand: its fingers cannot touch each other (no finger-on-finger pairs)");
+        }
         for (int k = 0; k < grip.hand.nact; k++) {
             run.close_act.push_back(grip.hand.act[k]);
             run.close_u.push_back(grip.hand.act_close_u[k]);
@@ -2615,7 +2635,8 @@ struct Builder {
         if (Entry *e = top.get("gripper")) {
             gt.reset(new Tab(table_of(*e->val, "gripper"), "gripper",
                              {"type", "system", "attach", "name", "hand", "palm", "links", "masses", "radius", "spacing",
-                              "checkpoint_spacing", "close", "torque", "open_at", "ratios", "motor", "clutch", "finger_joint", "pair_offset"}));
+                              "checkpoint_spacing", "close", "torque", "open_at", "ratios", "motor", "clutch", "finger_joint", "pair_offset",
+                              "finger_contact"}));
             const Node &tn = gt->need("type", "one of 'torque', 'soft', 'tako', 'space', 'torque_switch'");
             gty = choice_of(tn, gt->kp("type"), {"torque", "soft", "tako", "space", "torque_switch"});
             if (gty != "torque")
