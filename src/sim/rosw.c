@@ -452,7 +452,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
          * same start shares it: same t, and the state there is the same
          * until an event, which invalidates) */
         if (!w->jac_ok || w->jac_t != t)
-            if (jacobian(w, t, y, f0, sys, 1) != GSL_SUCCESS) return GSL_EBADFUNC;
+            if (jacobian(w, t, y, f0, sys, !CD_RODAS4_STRUCTURED_JAC) != GSL_SUCCESS) return GSL_EBADFUNC;
     } else if (!s->locator) {
         /* a retry at the same start (the last step was rejected) renews an old Jacobian */
         int retry = s->have_prev && s->t_prev == t;

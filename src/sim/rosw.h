@@ -20,6 +20,13 @@
 #define CD_ROSW_RENEW_ON_RETRY 1
 #endif
 
+/* 1: rodas4 uses the structured Jacobian (simulation.jacobian) without df/dt
+ * instead of the difference one: a build-time trial only (-DCD_RODAS4_STRUCTURED_JAC=1,
+ * docs/performance.md section 9: the order is lost and the steps collapse). */
+#ifndef CD_RODAS4_STRUCTURED_JAC
+#define CD_RODAS4_STRUCTURED_JAC 0
+#endif
+
 typedef struct {
     const cd_model *m;        /* set for the duration of one call (as the integrator's) */
     cd_data *d;
