@@ -2454,6 +2454,7 @@ struct Builder {
         case CD_STEP_RKF45: case CD_STEP_RKCK: per_step = 5; break;
         case CD_STEP_RK8PD: per_step = 12; break;
         case CD_STEP_ROS34PW2: case CD_STEP_AUTO: per_step = 4; break; /* auto: at least the stiff stepper's */
+        case CD_STEP_RODAS4: per_step = 6; break;
         case CD_STEP_RK4_FIXED: per_step = 4; hname = "h_fixed"; h = o.h_fixed; break;
         default: break;
         }
@@ -2524,7 +2525,7 @@ struct Builder {
         run.flush_every = t.num("flush_every", 1.0, Range::Pos);
         /* samples: "stop" (the integrator ends a step at each) or
          * "interpolate" (dense output); the stiff stepper interpolates by default */
-        run.interpolate = o.stepper == CD_STEP_ROS34PW2 || o.stepper == CD_STEP_AUTO;
+        run.interpolate = o.stepper == CD_STEP_ROS34PW2 || o.stepper == CD_STEP_AUTO || o.stepper == CD_STEP_RODAS4;
         if (Entry *e = t.get("sampling")) run.interpolate = choice_of(*e->val, t.kp("sampling"), {"stop", "interpolate"}) == "interpolate";
         if (run.interpolate && o.stepper == CD_STEP_RK4_FIXED) {
             Entry *e = t.get("sampling");

@@ -41,7 +41,7 @@ const char *cd_version(void) { return CD_VERSION_STRING; }
 static const char *shape_names[CD_SHAPE_NTYPES] = {
     "plane", "sphere", "box", "cylinder", "capsule", "convex"};
 static const char *stepper_names[CD_STEP_NTYPES] = {
-    "rkf45", "rkck", "rk8pd", "rk4imp", "msbdf", "rk4", "ros34pw2", "auto"};
+    "rkf45", "rkck", "rk8pd", "rk4imp", "msbdf", "rk4", "ros34pw2", "auto", "rodas4"};
 
 const char *cd_shape_type_name(cd_shape_type t)
 { return (t >= 0 && t < CD_SHAPE_NTYPES) ? shape_names[t] : "?"; }

@@ -183,7 +183,9 @@ size_t cd_integ_size(const cd_model *m)
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
     /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2 buffers */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (m->opt.stepper == CD_STEP_ROS34PW2 || m->opt.stepper == CD_STEP_AUTO ? cd_rosw_size(m) : 0);
+           (m->opt.stepper == CD_STEP_ROS34PW2 || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RODAS4
+                ? cd_rosw_size(m)
+                : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -210,7 +212,8 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
     /* steppers whose next step depends on more than (t, y): a snapshot is a restart point */
     I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP ||
-                 d->opt.stepper == CD_STEP_ROS34PW2 || d->opt.stepper == CD_STEP_AUTO;
+                 d->opt.stepper == CD_STEP_ROS34PW2 || d->opt.stepper == CD_STEP_AUTO ||
+                 d->opt.stepper == CD_STEP_RODAS4;
     I->autom = d->opt.stepper == CD_STEP_AUTO;
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
@@ -219,6 +222,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     case CD_STEP_RK4IMP: T = gsl_odeiv2_step_rk4imp; break;
     case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
     case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
+    case CD_STEP_RODAS4: T = cd_step_rodas4; break;
     case CD_STEP_AUTO: T = gsl_odeiv2_step_rk8pd; break;
     default: T = NULL; break;
     }
@@ -229,9 +233,9 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
         I->atol_set = d->opt.atol;
         /* the locator: rk8pd, or the stiff stepper itself (an explicit trial
          * step as long as a stiff step would be unstable) */
-        I->loc = gsl_odeiv2_step_alloc(T == cd_step_ros34pw2 ? T : gsl_odeiv2_step_rk8pd, n);
+        I->loc = gsl_odeiv2_step_alloc(T == cd_step_ros34pw2 || T == cd_step_rodas4 ? T : gsl_odeiv2_step_rk8pd, n);
         if (!I->loc) goto nomem;
-        if (T == cd_step_ros34pw2) {
+        if (T == cd_step_ros34pw2 || T == cd_step_rodas4) {
             cd_rosw_init(&I->rw, m, d, p + 1);
             cd_rosw_bind(I->drv->s, &I->rw, 0);
             cd_rosw_bind(I->loc, &I->rw, 1);
@@ -499,7 +503,10 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 }
 
 /* evaluations one more locator iteration costs (its stages and the forward) */
-static long trial_cost(const cd_integ *I) { return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : 14; }
+static long trial_cost(const cd_integ *I)
+{
+    return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
+}
 
 static int budget_left(const cd_data *d, const cd_integ *I, long need)
 {

@@ -40,15 +40,62 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* A tableau in the increment form above: s stages, alpha (strictly lower),
+ * gamma (strictly lower; the diagonal is gam), the solution b and the
+ * embedded bhat. exact: the method is a Rosenbrock method, not a W-method,
+ * and its order needs the exact Jacobian (and df/dt): rosw_apply then renews
+ * a finite-difference Jacobian at every step start and adds
+ * gsum_i h^2 df/dt to the stages (gsum_i = gam + sum_j gamma_ij). filter:
+ * the error estimate goes through (I - h gam J)^-1 (ROS34PW2's embedded
+ * solution is not L-stable; RODAS4's is). */
+#define CD_ROSW_SMAX 6
+typedef struct {
+    const char *name;
+    int s, order, exact, filter;
+    double gam;
+    double alpha[CD_ROSW_SMAX][CD_ROSW_SMAX], gamma[CD_ROSW_SMAX][CD_ROSW_SMAX];
+    double b[CD_ROSW_SMAX], bhat[CD_ROSW_SMAX], gsum[CD_ROSW_SMAX];
+} rosw_tab;
+
 #define GAM 0.435866521508459
-static const double ALPHA[4][3] = {
-    {0, 0, 0}, {0.87173304301691801, 0, 0}, {0.84457060015369423, -0.11299064236484185, 0}, {0, 0, 1}};
-static const double GAMMA[4][3] = {{0, 0, 0},
-                                   {-0.87173304301691801, 0, 0},
-                                   {-0.90338057013044082, 0.054180672388095326, 0},
-                                   {0.24212380706095346, -1.2232505839045147, 0.54526025533510214}};
-static const double B[4] = {0.24212380706095346, -1.2232505839045147, 1.5452602553351020, GAM};
-static const double BHAT[4] = {0.37810903145819369, -0.096042292212423178, 0.5, 0.2179332607542295};
+static const rosw_tab TAB_ROS34PW2 = {
+    "ros34pw2", 4, 3, 0, 1, GAM,
+    {{0, 0, 0}, {0.87173304301691801, 0, 0}, {0.84457060015369423, -0.11299064236484185, 0}, {0, 0, 1}},
+    {{0, 0, 0},
+     {-0.87173304301691801, 0, 0},
+     {-0.90338057013044082, 0.054180672388095326, 0},
+     {0.24212380706095346, -1.2232505839045147, 0.54526025533510214}},
+    {0.24212380706095346, -1.2232505839045147, 1.5452602553351020, GAM},
+    {0.37810903145819369, -0.096042292212423178, 0.5, 0.2179332607542295},
+    {0}};
+
+/* RODAS4: Hairer & Wanner, Solving Ordinary Differential Equations II (2nd
+ * ed., Springer 1996), sec. VI.4, and the coefficients of their code
+ * rodas.f (METH = 1: gamma = 0.25, c = 0.386, 0.21, 0.63, 1, 1): 6 stages,
+ * order 4 with an embedded order-3 solution, L-stable, stiffly accurate (the
+ * embedded solution is the last stage's argument). rodas.f states them in
+ * the transformed variables u_i = sum_j Gamma_ij k_j (a_ij, c_ij, m_i,
+ * e_i); converted to the increment form here by Gamma = (I/gam - C)^-1,
+ * alpha = a Gamma, b = m Gamma, bhat = (m - e) Gamma (tests/test_ros4.c
+ * checks the row sums against rodas.f's c_i and gamma_i and the measured
+ * order). 6 evaluations per step (5 stages and the end), plus the Jacobian. */
+static const rosw_tab TAB_RODAS4 = {
+    "rodas4", 6, 4, 1, 0, 0.25,
+    {{0, 0, 0, 0, 0},
+     {0.38600000000000001, 0, 0, 0, 0},
+     {0.1460747075254179, 0.063925292474582104, 0, 0, 0},
+     {-0.33081150366773016, 0.71115102516828466, 0.24966047849944542, 0, 0},
+     {-4.5525571863180314, 1.7101813632413321, 4.0143473321031724, -0.17197150902647376, 0},
+     {2.4286337654669881, -0.38274873376478435, -1.8557203309295804, 0.55983529922737629, 0.25}},
+    {{0, 0, 0, 0, 0},
+     {-0.3543, 0, 0, 0, 0},
+     {-0.13360250526817558, -0.012897494731824468, 0, 0, 0},
+     {1.5268491730064673, -0.53365628875045723, -1.2793928842560101, 0, 0},
+     {6.9811909517850195, -2.0929300970061164, -5.8700676630327528, 0.73180680825385003, 0},
+     {-2.0801894941809369, 0.59576235567668334, 1.7016177982672627, -0.088514519835880545, -0.3786761399271284}},
+    {0.34844427128605115, 0.21301362191189899, -0.15410253266231777, 0.47132077939149575, -0.1286761399271284, 0.25},
+    {2.4286337654669881, -0.38274873376478435, -1.8557203309295804, 0.55983529922737629, 0.25, 0},
+    {0.25, -0.1043, 0.1035, -0.0362, 0, 0}};
 
 static int na_capacity(const cd_model *m)
 {
@@ -59,7 +106,7 @@ static int na_capacity(const cd_model *m)
 size_t cd_rosw_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
-    return 16 + (3 * na * na + 9 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
+    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
            cd_jacw_size(m, (int)na);
 }
 
@@ -73,11 +120,13 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
     w->d = d;
     w->ny = m->ny;
     w->na_max = (int)na - 1;
+    w->gam = GAM;
     w->J = p; p += na * na;
     w->W = p; p += na * na;
     w->M2 = p; p += na * na;
     w->tu = p; p += na;
-    for (i = 0; i < 4; i++) { w->k[i] = p; p += n; }
+    for (i = 0; i < CD_ROSW_SMAX; i++) { w->k[i] = p; p += n; }
+    w->ft = p; p += n;
     w->g = p; p += n;
     w->ytmp = p; p += n;
     w->fs = p; p += n;
@@ -91,6 +140,40 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
     cd_jacw_init(&w->jw, m, (int)na, (void *)(w->iZ + na));
 }
 
+size_t cd_rosw_size_plain(int ny)
+{
+    size_t n = (size_t)(ny > 0 ? ny : 1), na = n + 1;
+    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16;
+}
+
+void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem)
+{
+    size_t n = (size_t)(ny > 0 ? ny : 1), na = n + 1;
+    double *p = (double *)(void *)(((uintptr_t)mem + 15) & ~(uintptr_t)15);
+    int i;
+    memset(w, 0, sizeof *w);
+    w->ny = ny;
+    w->na_max = ny;
+    w->gam = GAM;
+    w->fd_eps_plain = fd_eps;
+    w->J = p; p += na * na;
+    w->W = p; p += na * na;
+    w->M2 = p; p += na * na;
+    w->tu = p; p += na;
+    for (i = 0; i < CD_ROSW_SMAX; i++) { w->k[i] = p; p += n; }
+    w->ft = p; p += n;
+    w->g = p; p += n;
+    w->ytmp = p; p += n;
+    w->fs = p; p += n;
+    w->fd = p; p += n;
+    w->r = p; p += n;
+    w->perm = (int *)(void *)p;
+    w->act = w->perm + na;
+    w->iP = w->act + na;
+    w->iU = w->iP + na;
+    w->iZ = w->iU + na;
+}
+
 void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; }
 
 /* the active set at the current modes */
@@ -99,6 +182,11 @@ static void active_set(cd_rosw *w)
     const cd_model *m = w->m;
     const cd_data *d = w->d;
     int i, k, ns = 0, na = 0;
+    if (!m) { /* cd_rosw_init_plain: every unknown */
+        for (i = 0; i < w->ny; i++) w->act[i] = i;
+        w->na = w->ny;
+        return;
+    }
     for (i = 0; i < m->ny_slot_adr; i++) w->act[na++] = i;
     for (k = 0; k < m->nslot && ns < CD_ROSW_MAX_SLOTS; k++)
         if (d->slot_mode[k] != CD_MODE_OPEN) {
@@ -174,14 +262,26 @@ static void reduce(cd_rosw *w)
 }
 
 /* forward-difference Jacobian of f on the active set at (t, y), f0 = f(t, y) */
-static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys)
+static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys, int exact)
 {
     int a, c, na, n = w->ny;
-    double eps = w->d->opt.fd_eps;
+    double eps = w->d ? w->d->opt.fd_eps : w->fd_eps_plain;
     active_set(w);
     na = w->na;
     w->red = 0;
-    if (w->d->opt.jacobian == CD_JAC_MODEL) {
+    if (!w->m && sys->jacobian) { /* plain: the system's own (exact) Jacobian and df/dt */
+        if (sys->jacobian(t, y, w->J, w->ft, sys->params) != GSL_SUCCESS) return GSL_EBADFUNC;
+        if (!exact) memset(w->ft, 0, (size_t)n * sizeof(double));
+        goto done;
+    }
+    if (exact) { /* df/dt by a forward difference in t (schedules and profiles) */
+        double dt = eps * (fabs(t) > 1.0 ? fabs(t) : 1.0);
+        double tp = t + dt;
+        dt = tp - t;
+        if (GSL_ODEIV_FN_EVAL(sys, t + dt, y, w->fd) != GSL_SUCCESS) return GSL_EBADFUNC;
+        for (c = 0; c < n; c++) w->ft[c] = (w->fd[c] - f0[c]) / dt;
+    }
+    if (!exact && w->d->opt.jacobian == CD_JAC_MODEL) {
         if (cd_jac_model(w->m, w->d, t, y, w->act, na, w->J, &w->jw) != CD_OK) return GSL_EBADFUNC;
         reduce(w);
         goto done;
@@ -201,7 +301,7 @@ done:
     w->lu_ok = 0;
     w->jac_t = t;
     w->jac_age = 0;
-    w->d->stats.njac++;
+    if (w->d) w->d->stats.njac++;
     return GSL_SUCCESS;
 }
 
@@ -261,7 +361,7 @@ static int factor(cd_rosw *w, double h)
     int na = w->na, i;
     if (w->red) { /* S = I - c J_UU - c^2 M2 */
         int nU = w->nU, j;
-        double c = h * GAM;
+        double c = h * w->gam;
         for (i = 0; i < nU; i++)
             for (j = 0; j < nU; j++)
                 w->W[(size_t)i * nU + j] = (i == j ? 1.0 : 0.0) - c * w->J[(size_t)w->iU[i] * na + w->iU[j]] -
@@ -271,7 +371,7 @@ static int factor(cd_rosw *w, double h)
         w->lu_h = h;
         return GSL_SUCCESS;
     }
-    for (i = 0; i < na * na; i++) w->W[i] = -h * GAM * w->J[i];
+    for (i = 0; i < na * na; i++) w->W[i] = -h * w->gam * w->J[i];
     for (i = 0; i < na; i++) w->W[i * na + i] += 1.0;
     if (na == 0) { w->lu_ok = 1; w->lu_h = h; return GSL_SUCCESS; }
     if (lu_decomp(w->W, na, w->perm) != 0) return GSL_FAILURE;
@@ -286,7 +386,7 @@ static int factor(cd_rosw *w, double h)
 static int solve_active(cd_rosw *w, double *r)
 {
     int na = w->na, i, k;
-    double c = w->lu_h * GAM, *u = w->tu;
+    double c = w->lu_h * w->gam, *u = w->tu;
     if (!w->red) {
         lu_solve(w->W, na, w->perm, r);
         return GSL_SUCCESS;
@@ -317,6 +417,7 @@ static int solve_active(cd_rosw *w, double *r)
 
 typedef struct {
     cd_rosw *w;
+    const rosw_tab *tab;
     int locator;
     int have_prev;
     double t_prev;
@@ -326,7 +427,7 @@ static void *rosw_alloc(size_t dim)
 {
     rosw_state *s = (rosw_state *)calloc(1, sizeof *s);
     (void)dim;
-    if (!s) GSL_ERROR_NULL("failed to allocate the ROS34PW2 state", GSL_ENOMEM);
+    if (!s) GSL_ERROR_NULL("failed to allocate the Rosenbrock stepper state", GSL_ENOMEM);
     return s;
 }
 
@@ -335,6 +436,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
 {
     rosw_state *s = (rosw_state *)vs;
     cd_rosw *w = s->w;
+    const rosw_tab *T = s->tab;
     int n = (int)dim, i, j, a, c, na;
     const double *f0;
     if (!w || n != w->ny) return GSL_EINVAL;
@@ -344,20 +446,29 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         if (GSL_ODEIV_FN_EVAL(sys, t, y, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
         f0 = w->fs;
     }
-    if (!s->locator) {
+    if (T->exact) {
+        /* a Rosenbrock (not W) method: the Jacobian of this step's start,
+         * renewed at every new start (a retry or a locator step from the
+         * same start shares it: same t, and the state there is the same
+         * until an event, which invalidates) */
+        if (!w->jac_ok || w->jac_t != t)
+            if (jacobian(w, t, y, f0, sys, !CD_RODAS4_STRUCTURED_JAC) != GSL_SUCCESS) return GSL_EBADFUNC;
+    } else if (!s->locator) {
         /* a retry at the same start (the last step was rejected) renews an old Jacobian */
         int retry = s->have_prev && s->t_prev == t;
         if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE || (CD_ROSW_RENEW_ON_RETRY && retry && w->jac_t != t))
-            if (jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
+            if (jacobian(w, t, y, f0, sys, 0) != GSL_SUCCESS) return GSL_EBADFUNC;
         s->have_prev = 1;
         s->t_prev = t;
     } else if (!w->jac_ok) {
-        if (jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
+        if (jacobian(w, t, y, f0, sys, 0) != GSL_SUCCESS) return GSL_EBADFUNC;
     }
     na = w->na;
-    if (!w->lu_ok || w->lu_h != h)
+    if (!w->lu_ok || w->lu_h != h || w->gam != T->gam) {
+        w->gam = T->gam;
         if (factor(w, h) != GSL_SUCCESS) return GSL_FAILURE;
-    for (i = 0; i < 4; i++) {
+    }
+    for (i = 0; i < T->s; i++) {
         double *k = w->k[i], ai = 0;
         const double *F;
         if (i == 0) {
@@ -365,9 +476,9 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         } else {
             memcpy(w->ytmp, y, (size_t)n * sizeof(double));
             for (j = 0; j < i; j++) {
-                ai += ALPHA[i][j];
-                if (ALPHA[i][j] != 0)
-                    for (c = 0; c < n; c++) w->ytmp[c] += ALPHA[i][j] * w->k[j][c];
+                ai += T->alpha[i][j];
+                if (T->alpha[i][j] != 0)
+                    for (c = 0; c < n; c++) w->ytmp[c] += T->alpha[i][j] * w->k[j][c];
             }
             if (GSL_ODEIV_FN_EVAL(sys, t + ai * h, w->ytmp, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
             F = w->fs;
@@ -376,9 +487,11 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         if (i > 0) {
             memset(w->g, 0, (size_t)n * sizeof(double));
             for (j = 0; j < i; j++)
-                for (a = 0; a < na; a++) w->g[w->act[a]] += GAMMA[i][j] * w->k[j][w->act[a]];
+                for (a = 0; a < na; a++) w->g[w->act[a]] += T->gamma[i][j] * w->k[j][w->act[a]];
         }
         for (c = 0; c < n; c++) k[c] = h * F[c];
+        if (T->exact && T->gsum[i] != 0)
+            for (c = 0; c < n; c++) k[c] += T->gsum[i] * h * h * w->ft[c];
         if (na) {
             for (a = 0; a < na; a++) {
                 double acc = k[w->act[a]];
@@ -398,15 +511,15 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
     }
     for (c = 0; c < n; c++) {
         double dy = 0, e = 0;
-        for (i = 0; i < 4; i++) {
-            dy += B[i] * w->k[i][c];
-            e += (B[i] - BHAT[i]) * w->k[i][c];
+        for (i = 0; i < T->s; i++) {
+            dy += T->b[i] * w->k[i][c];
+            e += (T->b[i] - T->bhat[i]) * w->k[i][c];
         }
         y[c] += dy;
         yerr[c] = e;
     }
-    if (na) { /* the error estimate filtered by (I - h gamma J)^-1: stiff components, which
-               * the L-stable solution damps but the embedded one does not, do not count */
+    if (na && T->filter) { /* the error estimate filtered by (I - h gamma J)^-1: stiff components, which
+                            * the L-stable solution damps but the embedded one does not, do not count */
         for (a = 0; a < na; a++) w->r[a] = yerr[w->act[a]];
         if (solve_active(w, w->r) != GSL_SUCCESS) return GSL_FAILURE;
         for (a = 0; a < na; a++) yerr[w->act[a]] = w->r[a];
@@ -469,7 +582,28 @@ static int rosw_reset(void *vs, size_t dim)
 static unsigned int rosw_order(void *vs)
 {
     (void)vs;
-    return 3;
+    return (unsigned int)TAB_ROS34PW2.order;
+}
+
+static unsigned int rodas4_order(void *vs)
+{
+    (void)vs;
+    return (unsigned int)TAB_RODAS4.order;
+}
+
+int cd_rosw_tableau_sums(const gsl_odeiv2_step_type *T, double *c, double *gsum)
+{
+    const rosw_tab *tab = T == cd_step_rodas4 ? &TAB_RODAS4 : &TAB_ROS34PW2;
+    int i, j;
+    for (i = 0; i < tab->s; i++) {
+        c[i] = 0;
+        gsum[i] = tab->gam;
+        for (j = 0; j < i; j++) {
+            c[i] += tab->alpha[i][j];
+            gsum[i] += tab->gamma[i][j];
+        }
+    }
+    return tab->s;
 }
 
 static void rosw_free(void *vs) { free(vs); }
@@ -477,11 +611,17 @@ static void rosw_free(void *vs) { free(vs); }
 static const gsl_odeiv2_step_type rosw_type = {"ros34pw2", 1, 1, rosw_alloc, rosw_apply, rosw_set_driver,
                                                rosw_reset, rosw_order, rosw_free};
 const gsl_odeiv2_step_type *cd_step_ros34pw2 = &rosw_type;
+static const gsl_odeiv2_step_type rodas4_type = {"rodas4", 1, 1, rosw_alloc, rosw_apply, rosw_set_driver,
+                                                 rosw_reset, rodas4_order, rosw_free};
+const gsl_odeiv2_step_type *cd_step_rodas4 = &rodas4_type;
 
 void cd_rosw_bind(gsl_odeiv2_step *s, cd_rosw *w, int locator)
 {
     rosw_state *st = (rosw_state *)s->state;
     st->w = w;
+    st->tab = s->type == cd_step_rodas4 ? &TAB_RODAS4 : &TAB_ROS34PW2;
+    w->gam = st->tab->gam;
+    w->lu_ok = 0;
     st->locator = locator;
     st->have_prev = 0;
 }

@@ -1,4 +1,4 @@
-/* Internal: the linearly implicit Rosenbrock-W stepper ROS34PW2 (rosw.c). */
+/* Internal: the linearly implicit steppers ROS34PW2 (Rosenbrock-W) and RODAS4 (Rosenbrock) (rosw.c). */
 #ifndef CD_ROSW_H
 #define CD_ROSW_H
 #include "capdyn/sim.h"
@@ -20,6 +20,13 @@
 #define CD_ROSW_RENEW_ON_RETRY 1
 #endif
 
+/* 1: rodas4 uses the structured Jacobian (simulation.jacobian) without df/dt
+ * instead of the difference one: a build-time trial only (-DCD_RODAS4_STRUCTURED_JAC=1,
+ * docs/performance.md section 9: the order is lost and the steps collapse). */
+#ifndef CD_RODAS4_STRUCTURED_JAC
+#define CD_RODAS4_STRUCTURED_JAC 0
+#endif
+
 typedef struct {
     const cd_model *m;        /* set for the duration of one call (as the integrator's) */
     cd_data *d;
@@ -27,7 +34,10 @@ typedef struct {
     int *act;                 /* (na_max) their indices in y */
     double *J, *W;            /* (na_max^2) Jacobian on the active set; iteration matrix, LU */
     int *perm;                /* (na_max) row interchanges of the LU */
-    double *k[4], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny); r: (na_max) */
+    double *k[6], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny); r: (na_max) */
+    double *ft;               /* (ny) df/dt at the Jacobian's point (rodas4 only) */
+    double gam;               /* the bound method's diagonal gamma (cd_rosw_bind) */
+    double fd_eps_plain;      /* cd_rosw_init_plain: the difference increment (no model) */
     int jac_ok, lu_ok;        /* J valid; W holds the LU of I - h gamma J for h = lu_h */
     double jac_t, lu_h;
     long jac_age;             /* accepted steps since J was computed */
@@ -44,6 +54,12 @@ typedef struct {
 size_t cd_rosw_size(const cd_model *m);
 /* Lays the buffers out in mem. */
 void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem);
+/* A workspace without a model (tests): every one of the ny unknowns is
+ * implicit; the Jacobian is the system's own (gsl_odeiv2_system.jacobian,
+ * row-major, with df/dt) if it has one, else forward differences with
+ * increment fd_eps. */
+size_t cd_rosw_size_plain(int ny);
+void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem);
 /* The next step recomputes the Jacobian (a restart: modes, inputs or state changed). */
 void cd_rosw_invalidate(cd_rosw *w);
 
@@ -57,6 +73,13 @@ double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y);
  * a locator's steps share the Jacobian of the main stepper's step start and
  * never invalidate it. */
 extern const gsl_odeiv2_step_type *cd_step_ros34pw2;
+/* RODAS4 (Hairer & Wanner; rosw.c): order 4(3), L-stable, stiffly accurate,
+ * a Rosenbrock method (not W): it renews a finite-difference Jacobian on the
+ * active set, and df/dt, at every step start. */
+extern const gsl_odeiv2_step_type *cd_step_rodas4;
 void cd_rosw_bind(gsl_odeiv2_step *s, cd_rosw *w, int locator);
+/* The tableau's nodes c_i = sum_j alpha_ij and gamma_i = gamma + sum_j
+ * gamma_ij (tests: against the published ones); returns the stage count. */
+int cd_rosw_tableau_sums(const gsl_odeiv2_step_type *T, double *c, double *gsum);
 
 #endif
