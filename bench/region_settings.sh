@@ -50,12 +50,12 @@ for s in "$@"; do
         "$B" sweep --table "$OUT/${s}_$g.h5" | awk -v g="$g" '
             /^# region/ { area = $NF }
             !/^#/ { n[$6]++ }
-            END { printf "  %-28s captured %2d  escaped %2d  unresolved %2d  area %.4f L^2\n",
-                         g, n[1], n[2], n[0], area }'
+            END { printf "  %-28s captured %2d  escaped %2d  unresolved %2d  caged %2d  area %.4f L^2\n",
+                         g, n[1], n[2], n[0], n[3], area }'
     done
     paste <("$B" sweep --table "$OUT/${s}_tako_vs_space_region.h5" | grep -v '^#') \
           <("$B" sweep --table "$OUT/${s}_tako_vs_space_region_space.h5" | grep -v '^#') |
-        awk 'BEGIN { split("unresolved captured escaped", v, " ") }
+        awk 'BEGIN { split("unresolved captured escaped caged", v, " ") }
              { w = NF / 2; if ($6 != $(w + 6)) printf "  differs at x = %s, y = %s: TAKO %s, Space %s\n",
                                                      $2, $3, v[$6 + 1], v[$(w + 6) + 1] }'
 done
