@@ -110,17 +110,11 @@ size_t cd_rosw_size(const cd_model *m)
            cd_jacw_size(m, (int)na);
 }
 
-void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
+/* The buffers of w from p (aligned): the three na x na matrices, the stage
+ * and work vectors of n, then the index arrays; returns the end. */
+static int *carve(cd_rosw *w, double *p, size_t n, size_t na)
 {
-    size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
-    double *p = (double *)(void *)(((uintptr_t)mem + 15) & ~(uintptr_t)15);
     int i;
-    memset(w, 0, sizeof *w);
-    w->m = NULL; (void)m; /* set per call */
-    w->d = d;
-    w->ny = m->ny;
-    w->na_max = (int)na - 1;
-    w->gam = GAM;
     w->J = p; p += na * na;
     w->W = p; p += na * na;
     w->M2 = p; p += na * na;
@@ -137,7 +131,20 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
     w->iP = w->act + na;
     w->iU = w->iP + na;
     w->iZ = w->iU + na;
-    cd_jacw_init(&w->jw, m, (int)na, (void *)(w->iZ + na));
+    return w->iZ + na;
+}
+
+void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
+{
+    size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
+    double *p = (double *)(void *)(((uintptr_t)mem + 15) & ~(uintptr_t)15);
+    memset(w, 0, sizeof *w);
+    w->m = NULL; (void)m; /* set per call */
+    w->d = d;
+    w->ny = m->ny;
+    w->na_max = (int)na - 1;
+    w->gam = GAM;
+    cd_jacw_init(&w->jw, m, (int)na, (void *)carve(w, p, n, na));
 }
 
 size_t cd_rosw_size_plain(int ny)
@@ -150,28 +157,12 @@ void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem)
 {
     size_t n = (size_t)(ny > 0 ? ny : 1), na = n + 1;
     double *p = (double *)(void *)(((uintptr_t)mem + 15) & ~(uintptr_t)15);
-    int i;
     memset(w, 0, sizeof *w);
     w->ny = ny;
     w->na_max = ny;
     w->gam = GAM;
     w->fd_eps_plain = fd_eps;
-    w->J = p; p += na * na;
-    w->W = p; p += na * na;
-    w->M2 = p; p += na * na;
-    w->tu = p; p += na;
-    for (i = 0; i < CD_ROSW_SMAX; i++) { w->k[i] = p; p += n; }
-    w->ft = p; p += n;
-    w->g = p; p += n;
-    w->ytmp = p; p += n;
-    w->fs = p; p += n;
-    w->fd = p; p += n;
-    w->r = p; p += n;
-    w->perm = (int *)(void *)p;
-    w->act = w->perm + na;
-    w->iP = w->act + na;
-    w->iU = w->iP + na;
-    w->iZ = w->iU + na;
+    (void)carve(w, p, n, na);
 }
 
 void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; }
