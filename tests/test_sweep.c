@@ -566,7 +566,7 @@ Test(sweep, a_caged_variant_has_the_t_cage_of_capdyn_run_in_the_summary_table_an
                  0, "%s", err);
     free(err);
     for (k = 0; k < 2; k++) {
-        char which[8];
+        char which[16];
         snprintf(sh[k], sizeof sh[k], "%s/shard%d.h5", dir, k + 1);
         snprintf(which, sizeof which, "%d/2", k + 1);
         cr_assert_eq(capdyn(dir, NULL, &err, "sweep", sc, CAGE_SETS, "--shard", which, "-q", "-o", sh[k], NULL), 0,
