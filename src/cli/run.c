@@ -713,8 +713,6 @@ int cmd_run(int argc, char **argv)
         free(ctx.ft_max);
         free(ctx.fn_onset);
         free(ctx.fn_body);
-    free(ctx.t_onset);
-    free(ctx.t_body);
         free(ctx.t_onset);
         free(ctx.t_body);
         free(ctx.onset);
@@ -771,6 +769,8 @@ int cmd_run(int argc, char **argv)
     free(ctx.ft_max);
     free(ctx.fn_onset);
     free(ctx.fn_body);
+    free(ctx.t_onset);
+    free(ctx.t_body);
     free(ctx.onset);
     cd_data_free(d);
     cd_ctrl_free(ctl);
