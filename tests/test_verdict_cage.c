@@ -10,6 +10,7 @@
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
+#include "verdict_util.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -19,9 +20,7 @@
 #define NFINGER 3
 
 typedef struct {
-    cd_scenario *sc;
-    cd_data *d;
-    cd_monitor mon;
+    vrun v;               /* scenario, data, monitor (verdict_util.h) */
     int link[NFINGER][2]; /* body ids of hand/f<f>_l<j> */
     int palm;             /* the hand's base body */
     int tip[NFINGER];     /* fingertip check point: the tip link's farthest from its joint */
@@ -29,26 +28,19 @@ typedef struct {
 
 static void crun_open(crun *r, const char *const *ov, int nov)
 {
-    cd_error err;
-    cd_monitor_opts mo;
     int f, j;
     memset(r, 0, sizeof *r);
-    r->sc = cd_scenario_load(SCEN, ov, nov, &err);
-    cr_assert_not_null(r->sc, "%s", err.msg);
-    r->d = cd_data_create(r->sc->model, 0, &err);
-    cr_assert_not_null(r->d, "%s", err.msg);
-    mo = cd_scenario_monitor_opts(r->sc);
-    cr_assert_eq(cd_monitor_init(&r->mon, r->sc->model, r->d, &mo, &err), CD_OK, "%s", err.msg);
+    vrun_open(&r->v, SCEN, ov, nov);
     for (f = 0; f < NFINGER; f++)
         for (j = 0; j < 2; j++) {
             char name[32];
             snprintf(name, sizeof name, "hand/f%d_l%d", f, j);
-            r->link[f][j] = cd_model_body_id(r->sc->model, name);
+            r->link[f][j] = cd_model_body_id(r->v.sc->model, name);
             cr_assert_geq(r->link[f][j], 0, "no body %s", name);
         }
-    r->palm = r->sc->model->sys_body_adr[r->mon.opt.hand];
+    r->palm = r->v.sc->model->sys_body_adr[r->v.mon.opt.hand];
     for (f = 0; f < NFINGER; f++) {
-        const cd_model *m = r->sc->model;
+        const cd_model *m = r->v.sc->model;
         int cp;
         r->tip[f] = -1;
         for (cp = 0; cp < m->ncp; cp++)
@@ -56,24 +48,6 @@ static void crun_open(crun *r, const char *const *ov, int nov)
                 r->tip[f] = cp;
         cr_assert_geq(r->tip[f], 0, "finger %d has no tip check point", f);
     }
-    cd_monitor_update(&r->mon, r->sc->model, r->d);
-}
-
-static void crun_to(crun *r, double t_end)
-{
-    cd_error err;
-    double dt = r->sc->output_dt;
-    while (r->d->t < t_end - 1e-12) {
-        double tn = r->d->t + dt > t_end ? t_end : r->d->t + dt;
-        cr_assert_eq(cd_sim_advance(r->sc->model, r->d, tn, NULL, NULL, &err), CD_OK, "%s", err.msg);
-        cd_monitor_update(&r->mon, r->sc->model, r->d);
-    }
-}
-
-static void crun_close(crun *r)
-{
-    cd_data_free(r->d);
-    cd_scenario_free(r->sc);
 }
 
 /* finger of a body (0..2), -1 for the palm, the object or anything else */
@@ -90,14 +64,14 @@ static int finger_of(const crun *r, int body)
  * touches it; *palm = number of closed slots with the palm */
 static unsigned object_fingers(const crun *r, int *palm)
 {
-    const cd_model *m = r->sc->model;
+    const cd_model *m = r->v.sc->model;
     unsigned mask = 0;
-    int k, obj = r->mon.opt.object;
+    int k, obj = r->v.mon.opt.object;
     *palm = 0;
     for (k = 0; k < m->nslot; k++) {
         int bc = m->cp_body[m->slot_cp[k]], bs = m->shape_body[m->slot_shape[k]];
         int other = m->body_sys[bc] == obj ? bs : m->body_sys[bs] == obj ? bc : -1;
-        if (r->d->slot_mode[k] == CD_MODE_OPEN || other < 0) continue;
+        if (r->v.d->slot_mode[k] == CD_MODE_OPEN || other < 0) continue;
         if (other == r->palm) (*palm)++;
         else if (finger_of(r, other) >= 0) mask |= 1u << finger_of(r, other);
     }
@@ -110,10 +84,10 @@ static unsigned object_fingers(const crun *r, int *palm)
  * b != a */
 static int tip_on_tip(const crun *r, int a, int b)
 {
-    const cd_model *m = r->sc->model;
+    const cd_model *m = r->v.sc->model;
     int k, n = 0;
     for (k = 0; k < m->nslot; k++)
-        if (r->d->slot_mode[k] != CD_MODE_OPEN && m->slot_cp[k] == r->tip[a] &&
+        if (r->v.d->slot_mode[k] != CD_MODE_OPEN && m->slot_cp[k] == r->tip[a] &&
             m->shape_body[m->slot_shape[k]] == r->link[b][1])
             n++;
     return n;
@@ -125,21 +99,29 @@ typedef struct {
     double t_box, t_tips;
 } firsts;
 
+typedef struct {
+    const crun *r;
+    firsts *fs;
+} watch;
+
+/* at every sample: the first times the box is touched and two tips touch */
+static void watch_sample(void *user)
+{
+    const watch *w = (const watch *)user;
+    int palm, a, b, tips = 0;
+    for (a = 0; a < NFINGER; a++)
+        for (b = 0; b < NFINGER; b++)
+            if (a != b) tips += tip_on_tip(w->r, a, b);
+    if (isnan(w->fs->t_box) && object_fingers(w->r, &palm) != 0) w->fs->t_box = w->r->v.d->t;
+    if (isnan(w->fs->t_tips) && tips > 0) w->fs->t_tips = w->r->v.d->t;
+}
+
 static void crun_to_watching(crun *r, double t_end, firsts *fs)
 {
-    cd_error err;
-    double dt = r->sc->output_dt;
-    while (r->d->t < t_end - 1e-12) {
-        double tn = r->d->t + dt > t_end ? t_end : r->d->t + dt;
-        int palm, a, b, tips = 0;
-        cr_assert_eq(cd_sim_advance(r->sc->model, r->d, tn, NULL, NULL, &err), CD_OK, "%s", err.msg);
-        cd_monitor_update(&r->mon, r->sc->model, r->d);
-        for (a = 0; a < NFINGER; a++)
-            for (b = 0; b < NFINGER; b++)
-                if (a != b) tips += tip_on_tip(r, a, b);
-        if (isnan(fs->t_box) && object_fingers(r, &palm) != 0) fs->t_box = r->d->t;
-        if (isnan(fs->t_tips) && tips > 0) fs->t_tips = r->d->t;
-    }
+    watch w;
+    w.r = r;
+    w.fs = fs;
+    vrun_until(&r->v, t_end, watch_sample, &w);
 }
 
 /* The cage: the three fingertips meet above the box at 0.129 s, before any
@@ -162,25 +144,25 @@ Test(verdict_cage, three_fingers_on_an_off_centre_box_cage_it, .timeout = 120)
     cr_log_info("cage: tips meet at sample t = %g s, box touched at %g s", fs.t_tips, fs.t_box);
     cr_expect(fs.t_tips < fs.t_box, "the tips meet (first at sample t = %g s) before the box is touched (%g s)",
               fs.t_tips, fs.t_box);
-    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g, t_capture %g)",
-                 cd_verdict_name(r.mon.verdict), r.mon.epsilon, r.mon.t_capture);
-    cr_expect(isfinite(r.mon.t_cage) && fabs(r.mon.t_cage - 0.338) < 1.5e-3, "t_cage %g, measured 0.338 s",
-              r.mon.t_cage);
-    cr_expect(isnan(r.mon.t_capture), "never captured: t_capture %g", r.mon.t_capture);
-    cr_expect_eq(r.mon.epsilon, 0.0, "epsilon at the judgement %g", r.mon.epsilon);
-    crun_to(&r, r.sc->duration);
-    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "at the end: %s", cd_verdict_name(r.mon.verdict));
-    cr_expect(r.mon.enclosed, "the box is enclosed at the end");
+    cr_expect_eq(r.v.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g, t_capture %g)",
+                 cd_verdict_name(r.v.mon.verdict), r.v.mon.epsilon, r.v.mon.t_capture);
+    cr_expect(isfinite(r.v.mon.t_cage) && fabs(r.v.mon.t_cage - 0.338) < 1.5e-3, "t_cage %g, measured 0.338 s",
+              r.v.mon.t_cage);
+    cr_expect(isnan(r.v.mon.t_capture), "never captured: t_capture %g", r.v.mon.t_capture);
+    cr_expect_eq(r.v.mon.epsilon, 0.0, "epsilon at the judgement %g", r.v.mon.epsilon);
+    vrun_to(&r.v, r.v.sc->duration);
+    cr_expect_eq(r.v.mon.verdict, CD_VERDICT_CAGED, "at the end: %s", cd_verdict_name(r.v.mon.verdict));
+    cr_expect(r.v.mon.enclosed, "the box is enclosed at the end");
     touch = object_fingers(&r, &palm);
     cr_expect_eq(touch, (1u << 1) | (1u << 2), "fingers touching the box (bit per finger): 0x%x, expected 1 and 2 only",
                  touch);
     cr_expect_eq(palm, 0, "%d contacts with the palm", palm);
-    cr_expect_eq(r.mon.n_stick + r.mon.n_slip, 2, "%d stick + %d slip contacts with the box, expected 2", r.mon.n_stick,
-                 r.mon.n_slip);
+    cr_expect_eq(r.v.mon.n_stick + r.v.mon.n_slip, 2, "%d stick + %d slip contacts with the box, expected 2",
+                 r.v.mon.n_stick, r.v.mon.n_slip);
     cr_expect(tip_on_tip(&r, 0, 1) >= 1 && tip_on_tip(&r, 0, 2) >= 1,
               "finger 0's tip on the tip links of fingers 1 (%d slots) and 2 (%d slots)", tip_on_tip(&r, 0, 1),
               tip_on_tip(&r, 0, 2));
-    crun_close(&r);
+    vrun_close(&r.v);
 }
 
 /* Not a fine placement: the box 2 mm off the mirror plane of fingers 1 and 2
@@ -195,14 +177,14 @@ Test(verdict_cage, the_box_moved_2_mm_and_turned_10_deg_is_still_caged, .timeout
     int palm;
     unsigned touch;
     crun_open(&r, ov, 2);
-    crun_to(&r, 0.5);
-    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g, t_capture %g)",
-                 cd_verdict_name(r.mon.verdict), r.mon.epsilon, r.mon.t_capture);
-    cr_expect(fabs(r.mon.t_cage - 0.339) < 1.5e-3, "t_cage %g, measured 0.339 s", r.mon.t_cage);
-    cr_expect_eq(r.mon.epsilon, 0.0, "epsilon at the judgement %g", r.mon.epsilon);
+    vrun_to(&r.v, 0.5);
+    cr_expect_eq(r.v.mon.verdict, CD_VERDICT_CAGED, "verdict %s (epsilon %g, t_capture %g)",
+                 cd_verdict_name(r.v.mon.verdict), r.v.mon.epsilon, r.v.mon.t_capture);
+    cr_expect(fabs(r.v.mon.t_cage - 0.339) < 1.5e-3, "t_cage %g, measured 0.339 s", r.v.mon.t_cage);
+    cr_expect_eq(r.v.mon.epsilon, 0.0, "epsilon at the judgement %g", r.v.mon.epsilon);
     touch = object_fingers(&r, &palm);
     cr_expect(touch == 6u && palm == 0, "fingers 0x%x (expected 1 and 2) and %d palm contacts", touch, palm);
-    crun_close(&r);
+    vrun_close(&r.v);
 }
 
 /* The counterpart: the box 10 mm toward finger 0 instead (z = +0.01). Finger
@@ -221,12 +203,12 @@ Test(verdict_cage, the_box_toward_the_third_finger_is_captured, .timeout = 120)
     cr_log_info("toward finger 0: box touched at sample t = %g s, tips meet at %g s", fs.t_box, fs.t_tips);
     cr_expect(fs.t_box < fs.t_tips, "the box is touched (first at sample t = %g s) before the tips meet (%g s)",
               fs.t_box, fs.t_tips);
-    cr_expect_eq(r.mon.verdict, CD_VERDICT_CAPTURED, "verdict %s (epsilon %g, t_cage %g)",
-                 cd_verdict_name(r.mon.verdict), r.mon.epsilon, r.mon.t_cage);
-    cr_expect(fabs(r.mon.t_capture - 0.359) < 1.5e-3, "t_capture %g, measured 0.359 s", r.mon.t_capture);
-    cr_expect_gt(r.mon.epsilon, 0.0, "epsilon at the verdict %g", r.mon.epsilon);
-    cr_expect(isnan(r.mon.t_cage), "never caged: t_cage %g", r.mon.t_cage);
+    cr_expect_eq(r.v.mon.verdict, CD_VERDICT_CAPTURED, "verdict %s (epsilon %g, t_cage %g)",
+                 cd_verdict_name(r.v.mon.verdict), r.v.mon.epsilon, r.v.mon.t_cage);
+    cr_expect(fabs(r.v.mon.t_capture - 0.359) < 1.5e-3, "t_capture %g, measured 0.359 s", r.v.mon.t_capture);
+    cr_expect_gt(r.v.mon.epsilon, 0.0, "epsilon at the verdict %g", r.v.mon.epsilon);
+    cr_expect(isnan(r.v.mon.t_cage), "never caged: t_cage %g", r.v.mon.t_cage);
     touch = object_fingers(&r, &palm);
     cr_expect_eq(touch, 7u, "fingers touching the box (bit per finger): 0x%x, expected all three", touch);
-    crun_close(&r);
+    vrun_close(&r.v);
 }
