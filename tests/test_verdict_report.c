@@ -59,6 +59,18 @@ static const char *ball_toml =
     "checkpoints = \"ball\"\n"
     "shape = \"wall/face\"\n";
 
+/* ball_toml written to DIR/ball.toml, its results path DIR/ball.h5 */
+static void ball_files(const char *dir, char *toml, size_t ntoml, char *h5, size_t nh5)
+{
+    FILE *f;
+    snprintf(toml, ntoml, "%s/ball.toml", dir);
+    snprintf(h5, nh5, "%s/ball.h5", dir);
+    f = fopen(toml, "w");
+    cr_assert_not_null(f);
+    fputs(ball_toml, f);
+    fclose(f);
+}
+
 static double force(double s) { return s < 0 ? 0.0 : 100.0 * exp(-100.0 * s) * (2.0 - 100.0 * s); }
 
 /* the number after "KEY  " at the start of a line of text (NaN if absent) */
@@ -92,14 +104,8 @@ Test(verdict_report, run_and_info_name_the_peak_at_samples_over_steps_and_the_on
     char dir[64], toml[256], h5[256], *out = NULL, *err = NULL, *iout = NULL;
     double smp = 0, body, onset, s_run, s_info, ws = 2.0 / 3.0;
     int k;
-    FILE *f;
     make_tmpdir(dir, sizeof dir);
-    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
-    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
-    f = fopen(toml, "w");
-    cr_assert_not_null(f);
-    fputs(ball_toml, f);
-    fclose(f);
+    ball_files(dir, toml, sizeof toml, h5, sizeof h5);
     cr_assert_eq(capdyn(dir, &out, &err, "run", toml, "-o", h5, (char *)NULL), 0, "%s", err);
     for (k = 0; k <= 30; k++) {
         double fk = force(k * 1e-3 - 5.5e-3);
@@ -319,14 +325,8 @@ Test(verdict_report, info_of_a_file_without_the_peaks_over_steps_says_they_are_n
     double nans[64];
     int k;
     hid_t f, g, d;
-    FILE *fp;
     make_tmpdir(dir, sizeof dir);
-    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
-    snprintf(h5, sizeof h5, "%s/ball.h5", dir);
-    fp = fopen(toml, "w");
-    cr_assert_not_null(fp);
-    fputs(ball_toml, fp);
-    fclose(fp);
+    ball_files(dir, toml, sizeof toml, h5, sizeof h5);
     cr_assert_eq(capdyn(dir, &out, &err, "run", toml, "-o", h5, "-q", (char *)NULL), 0, "%s", err);
     free(err);
     free(out);
