@@ -178,14 +178,15 @@ void cd_integ_free(void *p)
     I->s_stiff = I->loc_stiff = NULL;
 }
 
+/* the linearly implicit steppers of rosw.c (their workspace: cd_rosw) */
+static int rosenbrock(cd_stepper s) { return s == CD_STEP_ROS34PW2 || s == CD_STEP_RODAS4; }
+
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
     /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2 buffers */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (m->opt.stepper == CD_STEP_ROS34PW2 || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RODAS4
-                ? cd_rosw_size(m)
-                : 0);
+           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO ? cd_rosw_size(m) : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -211,9 +212,8 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->stepper = d->opt.stepper;
     I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
     /* steppers whose next step depends on more than (t, y): a snapshot is a restart point */
-    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP ||
-                 d->opt.stepper == CD_STEP_ROS34PW2 || d->opt.stepper == CD_STEP_AUTO ||
-                 d->opt.stepper == CD_STEP_RODAS4;
+    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP || rosenbrock(d->opt.stepper) ||
+                 d->opt.stepper == CD_STEP_AUTO;
     I->autom = d->opt.stepper == CD_STEP_AUTO;
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
@@ -233,9 +233,9 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
         I->atol_set = d->opt.atol;
         /* the locator: rk8pd, or the stiff stepper itself (an explicit trial
          * step as long as a stiff step would be unstable) */
-        I->loc = gsl_odeiv2_step_alloc(T == cd_step_ros34pw2 || T == cd_step_rodas4 ? T : gsl_odeiv2_step_rk8pd, n);
+        I->loc = gsl_odeiv2_step_alloc(rosenbrock(d->opt.stepper) ? T : gsl_odeiv2_step_rk8pd, n);
         if (!I->loc) goto nomem;
-        if (T == cd_step_ros34pw2 || T == cd_step_rodas4) {
+        if (rosenbrock(d->opt.stepper)) {
             cd_rosw_init(&I->rw, m, d, p + 1);
             cd_rosw_bind(I->drv->s, &I->rw, 0);
             cd_rosw_bind(I->loc, &I->rw, 1);
@@ -848,9 +848,6 @@ static int begin_call(const cd_model *m, cd_data *d, cd_integ *I, cd_status *st,
     return need;
 }
 
-/* *started is set once the call got past its argument and option checks
- * (a rejected call leaves no trace: the next one still sees the caller's
- * changes). */
 /* A diverged explicit step. GSL's standard control accepts a step when
  * |err_i| <= atol + rtol (|y1_i| + h |f(t1, y1)_i|). Far past its stability
  * limit (h |lambda| of tens: a stick damper on a light fingertip after an
@@ -874,6 +871,9 @@ static int diverged(const cd_model *m, const cd_integ *I, const double *y1, cons
     return 0;
 }
 
+/* *started is set once the call got past its argument and option checks
+ * (a rejected call leaves no trace: the next one still sees the caller's
+ * changes). */
 static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
                          cd_error *err, int *started)
 {
