@@ -406,6 +406,106 @@ Test(contact_geometry, convex_hull_is_exact_like_the_box)
     }
 }
 
+/* the face triangles of hull shape 0 of a one-shape model built from v */
+static cd_model *hull_model(const double *v, int nv)
+{
+    cd_model *t = cd_model_create();
+    cd_system_desc s = cd_system_desc_default();
+    cd_error e;
+    s.type = CD_BASE_FIXED;
+    cd_model_add_system(t, &s, &e);
+    cr_assert(cd_model_add_shape(t, 0, CD_SHAPE_CONVEX, NULL, NULL, NULL, v, nv, &e) == 0, "%s", e.msg);
+    cr_assert_eq(cd_model_finalize(t, &e), CD_OK, "%s", e.msg);
+    return t;
+}
+
+/* total area of the face triangles; counts those not wound outward (by
+ * their stored plane) or of zero area */
+static double hull_area(const cd_model *t, int *bad)
+{
+    double area = 0;
+    int f;
+    *bad = 0;
+    for (f = 0; f < t->shape_face_num[0]; f++) {
+        const int *fv = t->face_vert + 3 * (t->shape_face_adr[0] + f);
+        const double *a = t->vert + 3 * fv[0], *b = t->vert + 3 * fv[1], *c = t->vert + 3 * fv[2];
+        const double *pl = t->face_plane + 4 * (t->shape_face_adr[0] + f);
+        double u[3] = {b[0] - a[0], b[1] - a[1], b[2] - a[2]}, w[3] = {c[0] - a[0], c[1] - a[1], c[2] - a[2]};
+        double x[3] = {u[1] * w[2] - u[2] * w[1], u[2] * w[0] - u[0] * w[2], u[0] * w[1] - u[1] * w[0]};
+        double nx = x[0] * pl[0] + x[1] * pl[1] + x[2] * pl[2];
+        if (!(nx > 1e-12)) (*bad)++;
+        area += 0.5 * sqrt(x[0] * x[0] + x[1] * x[1] + x[2] * x[2]);
+    }
+    return area;
+}
+
+Test(contact_geometry, hull_faces_tile_the_surface_once)
+{
+    /* The face triangles found at finalize cover the hull's surface exactly
+     * once, wound outward: their areas add up to the surface area (closed
+     * form, to 1e-12 relative) and a flat face of k corners gives k - 2
+     * triangles, whatever other vertices lie on it (edge midpoints, face
+     * centres add none). Cases: a cube, the same cube with every edge
+     * midpoint and face centre added, and the lopsided pentagonal prism of
+     * scenarios/soft_wrap.toml (5 rectangles of 2 triangles, 2 pentagons of 3:
+     * 16). Every coplanar triple of the prism would give 40 overlapping
+     * triangles, and the query time grows with their number. */
+    double cube[3 * 26], prism[30], area, pent = 0, perim = 0, prism_area;
+    int nc = 0, i, j, k, bad;
+    cd_model *t;
+    for (i = -1; i <= 1; i++)
+        for (j = -1; j <= 1; j++)
+            for (k = -1; k <= 1; k++) {
+                if (!i && !j && !k) continue;
+                cube[3 * nc] = 0.1 * i; cube[3 * nc + 1] = 0.1 * j; cube[3 * nc + 2] = 0.1 * k;
+                nc++;
+            }
+    /* the 8 corners first (|i| = |j| = |k| = 1) */
+    {
+        double corners[24];
+        int m = 0;
+        for (i = 0; i < nc; i++)
+            if (cube[3 * i] != 0 && cube[3 * i + 1] != 0 && cube[3 * i + 2] != 0) {
+                memcpy(corners + 3 * m, cube + 3 * i, 3 * sizeof(double));
+                m++;
+            }
+        cr_assert_eq(m, 8);
+        t = hull_model(corners, 8);
+        area = hull_area(t, &bad);
+        cr_expect_eq(t->shape_face_num[0], 12, "a cube: %d triangles, expected 12", t->shape_face_num[0]);
+        cr_expect_eq(bad, 0, "%d triangles not wound outward", bad);
+        cr_expect_leq(fabs(area - 6 * 0.04) / 0.24, 1e-12, "cube area %.17g, expected 0.24", area);
+        cd_model_free(t);
+    }
+    t = hull_model(cube, nc);
+    area = hull_area(t, &bad);
+    cr_expect_eq(t->shape_face_num[0], 12, "a cube with 18 extra boundary vertices: %d triangles, expected 12",
+                 t->shape_face_num[0]);
+    cr_expect_eq(bad, 0, "%d triangles not wound outward or of zero area", bad);
+    cr_expect_leq(fabs(area - 0.24) / 0.24, 1e-12, "cube area %.17g, expected 0.24", area);
+    cd_model_free(t);
+    {
+        static const double xy[10] = {-0.04375, -0.025, 0.0375, -0.0375, 0.05, 0.01875, 0.00625, 0.05, -0.0375, 0.0375};
+        for (i = 0; i < 5; i++) {
+            int n = (i + 1) % 5;
+            double dx = xy[2 * n] - xy[2 * i], dy = xy[2 * n + 1] - xy[2 * i + 1];
+            pent += 0.5 * (xy[2 * i] * xy[2 * n + 1] - xy[2 * n] * xy[2 * i + 1]);
+            perim += sqrt(dx * dx + dy * dy);
+            prism[3 * i] = prism[3 * i + 15] = xy[2 * i];
+            prism[3 * i + 1] = prism[3 * i + 16] = xy[2 * i + 1];
+            prism[3 * i + 2] = -0.03;
+            prism[3 * i + 17] = 0.03;
+        }
+        prism_area = 2 * fabs(pent) + perim * 0.06;
+        t = hull_model(prism, 10);
+        area = hull_area(t, &bad);
+        cr_expect_eq(t->shape_face_num[0], 16, "the soft_wrap prism: %d triangles, expected 16", t->shape_face_num[0]);
+        cr_expect_eq(bad, 0, "%d triangles not wound outward", bad);
+        cr_expect_leq(fabs(area - prism_area) / prism_area, 1e-12, "prism area %.17g, expected %.17g", area, prism_area);
+        cd_model_free(t);
+    }
+}
+
 /* ---- the hull query's pruning and the broad phase of open slots ---------- */
 
 /* nearest point of triangle abc to p (by regions: vertices, edges, face) */

@@ -165,12 +165,15 @@ static void closest_on_triangle(const double p[3], const double a[3], const doub
 int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, const double p[3], double *d,
                  double n[3], double s[3])
 {
+    enum { HULL_H_CACHE = 64 };
+    double hc[HULL_H_CACHE];
     int f, best = 0;
     double hmax = -HUGE_VAL;
     if (!cd_v3_isfinite(p)) return -1;
     /* inside (or on) the hull: the signed distance is the largest plane distance */
     for (f = 0; f < nf; f++) {
         double h = cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
+        if (f < HULL_H_CACHE) hc[f] = h;
         if (h > hmax) { hmax = h; best = f; }
     }
     if (hmax <= 0) {
@@ -185,7 +188,11 @@ int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, co
      * cone at q, so some face through q has n.(p - q) > 0, i.e. h > 0), and a
      * face is no nearer than its plane (distance >= h): start from the face
      * of largest h and skip every face with h^2 >= the best squared distance.
-     * Exact: the same minimum as the scan over every face. */
+     * The hull lies behind every face plane, so no point of it is nearer than
+     * hmax: once the best squared distance is at most hmax^2 (p projects into
+     * a face of largest h, the common case of a point facing a side) no face
+     * can do better and the scan stops. Exact: the same minimum as the scan
+     * over every face. */
     {
         double dmin, q[3], t[3];
         const int *b3 = fv + 3 * best;
@@ -193,8 +200,8 @@ int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, co
         cd_v3_sub(t, p, q);
         dmin = cd_v3_dot(t, t);
         cd_v3_copy(s, q);
-        for (f = 0; f < nf; f++) {
-            double dd, h = cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
+        for (f = 0; f < nf && dmin > hmax * hmax; f++) {
+            double dd, h = f < HULL_H_CACHE ? hc[f] : cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
             if (f == best || h <= 0 || h * h >= dmin) continue;
             closest_on_triangle(p, vert + 3 * fv[3 * f], vert + 3 * fv[3 * f + 1], vert + 3 * fv[3 * f + 2], q);
             cd_v3_sub(t, p, q);

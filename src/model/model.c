@@ -1147,18 +1147,38 @@ int cd_model_body_id(const cd_model *m, const char *name)
     return found;
 }
 
+/* Is (i, j, k) a non-collinear triple of vertex indices (1e-12 of size^2)? */
+static int hull_triple(const double *v, int i, int j, int k, double size, double n[3])
+{
+    double a[3], b[3], len;
+    cd_v3_sub(a, v + 3 * j, v + 3 * i);
+    cd_v3_sub(b, v + 3 * k, v + 3 * i);
+    cd_v3_cross(n, a, b);
+    len = cd_v3_norm(n);
+    if (!(len > 1e-12 * size * size)) return 0;
+    cd_v3_scale(n, n, 1.0 / len);
+    return 1;
+}
+
 /* Faces of the convex hull of shape sh's vertices, by brute force over
- * vertex triples: a triple is a face when every vertex lies on one side of
- * its plane (within 1e-9 of the hull's size). Coplanar faces with more than
- * three vertices yield several overlapping triangles, which is harmless for
- * the distance query. O(n^4): meant for hulls of tens of vertices, run once.
- * With store == 0 only counts. Returns the number of faces, or -1 if all
- * vertices lie in one plane (no volume). */
+ * vertex triples: a triple spans a face plane when every vertex lies on one
+ * side of it (within 1e-9 of the hull's size). Each face plane is emitted
+ * once, from the first non-collinear triple of its vertices (in index
+ * order), as a fan of triangles over the 2-D convex hull of every vertex on
+ * it (Andrew's monotone chain; vertices inside the face or on its edges add
+ * no triangle), wound counter-clockwise seen from outside. Every triangle of
+ * a face stores the same plane. A pentagonal prism gives 16 triangles, not
+ * the 40 overlapping ones of every coplanar triple. O(n^4): meant for hulls
+ * of tens of vertices, run once. With store == 0 only counts. Returns the
+ * number of triangles, -1 if all vertices lie in one plane (no volume), -2
+ * if out of memory. */
 static int hull_faces(cd_model *m, int sh, int store, int at)
 {
     const double *v = m->vert + 3 * m->shape_vert_adr[sh];
     int nv = m->shape_vert_num[sh], i, j, k, l, nf = 0;
     double size = 0, c[3] = {0, 0, 0};
+    int *on, *ch;
+    double *q;
     for (i = 0; i < nv; i++) cd_v3_axpy(c, 1.0 / nv, v + 3 * i);
     for (i = 0; i < nv; i++) {
         double t[3], r;
@@ -1166,17 +1186,16 @@ static int hull_faces(cd_model *m, int sh, int store, int at)
         r = cd_v3_norm(t);
         if (r > size) size = r;
     }
+    on = malloc((size_t)(nv > 0 ? nv : 1) * sizeof(int));
+    ch = malloc((size_t)(2 * nv + 1) * sizeof(int));
+    q = malloc((size_t)(nv > 0 ? nv : 1) * 2 * sizeof(double));
+    if (!on || !ch || !q) { free(on); free(ch); free(q); return -2; }
     for (i = 0; i < nv; i++)
         for (j = i + 1; j < nv; j++)
             for (k = j + 1; k < nv; k++) {
-                double a[3], b[3], n[3], o, len;
-                int pos = 0, neg = 0;
-                cd_v3_sub(a, v + 3 * j, v + 3 * i);
-                cd_v3_sub(b, v + 3 * k, v + 3 * i);
-                cd_v3_cross(n, a, b);
-                len = cd_v3_norm(n);
-                if (!(len > 1e-12 * size * size)) continue; /* collinear */
-                cd_v3_scale(n, n, 1.0 / len);
+                double n[3], o, e1[3], e2[3];
+                int pos = 0, neg = 0, non = 0, first = 0, a, b, cc, nh, lo;
+                if (!hull_triple(v, i, j, k, size, n)) continue; /* collinear */
                 o = cd_v3_dot(n, v + 3 * i);
                 for (l = 0; l < nv && !(pos && neg); l++) {
                     double h = cd_v3_dot(n, v + 3 * l) - o;
@@ -1184,18 +1203,65 @@ static int hull_faces(cd_model *m, int sh, int store, int at)
                     if (h < -1e-9 * size) neg = 1;
                 }
                 if (pos && neg) continue;
-                if (!pos && !neg) return -1; /* every vertex on this plane: a flat hull */
+                if (!pos && !neg) { free(on); free(ch); free(q); return -1; } /* a flat hull */
                 if (pos) { cd_v3_scale(n, n, -1.0); o = -o; }
-                if (store) {
-                    int f = at + nf;
-                    m->face_vert[3 * f] = m->shape_vert_adr[sh] + i;
-                    m->face_vert[3 * f + 1] = m->shape_vert_adr[sh] + j;
-                    m->face_vert[3 * f + 2] = m->shape_vert_adr[sh] + k;
-                    cd_v3_copy(m->face_plane + 4 * f, n);
-                    m->face_plane[4 * f + 3] = o;
+                /* the vertices on this plane; emit the face only from its first triple */
+                for (l = 0; l < nv; l++)
+                    if (fabs(cd_v3_dot(n, v + 3 * l) - o) <= 1e-9 * size) on[non++] = l;
+                for (a = 0; a < non && !first; a++)
+                    for (b = a + 1; b < non && !first; b++)
+                        for (cc = b + 1; cc < non && !first; cc++) {
+                            double t[3];
+                            if (hull_triple(v, on[a], on[b], on[cc], size, t))
+                                first = (on[a] == i && on[b] == j && on[cc] == k) ? 1 : -1;
+                        }
+                if (first != 1) continue;
+                /* in-plane coordinates (e1, e2, n right-handed), sorted by (x, y) */
+                cd_v3_sub(e1, v + 3 * j, v + 3 * i);
+                cd_v3_normalize(e1);
+                cd_v3_cross(e2, n, e1);
+                for (a = 0; a < non; a++) {
+                    double t[3];
+                    cd_v3_sub(t, v + 3 * on[a], v + 3 * i);
+                    q[2 * a] = cd_v3_dot(t, e1);
+                    q[2 * a + 1] = cd_v3_dot(t, e2);
                 }
-                nf++;
+                for (a = 1; a < non; a++) /* insertion sort: a face has few vertices */
+                    for (b = a; b > 0 && (q[2 * b] < q[2 * b - 2] ||
+                                          (q[2 * b] == q[2 * b - 2] && q[2 * b + 1] < q[2 * b - 1])); b--) {
+                        double tx = q[2 * b], ty = q[2 * b + 1];
+                        int ti = on[b];
+                        q[2 * b] = q[2 * b - 2]; q[2 * b + 1] = q[2 * b - 1]; on[b] = on[b - 1];
+                        q[2 * b - 2] = tx; q[2 * b - 1] = ty; on[b - 1] = ti;
+                    }
+                /* monotone chain, counter-clockwise; strict turns only */
+#define HULL_TURN(A, B, C) ((q[2 * (B)] - q[2 * (A)]) * (q[2 * (C) + 1] - q[2 * (A) + 1]) - \
+                            (q[2 * (B) + 1] - q[2 * (A) + 1]) * (q[2 * (C)] - q[2 * (A)]))
+                nh = 0;
+                for (a = 0; a < non; a++) {
+                    while (nh >= 2 && !(HULL_TURN(ch[nh - 2], ch[nh - 1], a) > 1e-12 * size * size)) nh--;
+                    ch[nh++] = a;
+                }
+                lo = nh + 1;
+                for (a = non - 2; a >= 0; a--) {
+                    while (nh >= lo && !(HULL_TURN(ch[nh - 2], ch[nh - 1], a) > 1e-12 * size * size)) nh--;
+                    ch[nh++] = a;
+                }
+#undef HULL_TURN
+                nh--; /* the last point repeats the first */
+                for (a = 1; a + 1 < nh; a++) {
+                    if (store) {
+                        int f = at + nf;
+                        m->face_vert[3 * f] = m->shape_vert_adr[sh] + on[ch[0]];
+                        m->face_vert[3 * f + 1] = m->shape_vert_adr[sh] + on[ch[a]];
+                        m->face_vert[3 * f + 2] = m->shape_vert_adr[sh] + on[ch[a + 1]];
+                        cd_v3_copy(m->face_plane + 4 * f, n);
+                        m->face_plane[4 * f + 3] = o;
+                    }
+                    nf++;
+                }
             }
+    free(on); free(ch); free(q);
     return nf;
 }
 
@@ -1433,6 +1499,7 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
         if (m->shape_type[i] == CD_SHAPE_CONVEX) {
             m->shape_face_adr[i] = m->nface;
             m->shape_face_num[i] = hull_faces(m, i, 0, 0);
+            if (m->shape_face_num[i] == -2) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
             if (m->shape_face_num[i] < 4) { /* flat (-1) or degenerate */
                 seterr(err, CD_EINVAL, "convex shape %d on body '%s': its vertices span no volume", i,
                        m->body_name[m->shape_body[i]]);
@@ -1444,7 +1511,10 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
     m->face_plane = malloc((size_t)(m->nface ? m->nface : 1) * 4 * sizeof(double));
     if (!m->face_vert || !m->face_plane) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
     for (i = 0; i < m->nshape; i++)
-        if (m->shape_type[i] == CD_SHAPE_CONVEX) hull_faces(m, i, 1, m->shape_face_adr[i]);
+        if (m->shape_type[i] == CD_SHAPE_CONVEX && hull_faces(m, i, 1, m->shape_face_adr[i]) != m->shape_face_num[i]) {
+            seterr(err, CD_ENOMEM, "out of memory");
+            return CD_ENOMEM;
+        }
     {
         cd_status st = finalize_joints(m, err);
         if (st != CD_OK) return st;
