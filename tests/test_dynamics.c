@@ -30,6 +30,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../src/math/cd_math.h" /* cd_all_finite: the evaluation's y and ydot check */
+
 #define PI 3.14159265358979323846
 
 /* ---- small helpers ------------------------------------------------------- */
@@ -1077,6 +1079,41 @@ Test(dynamics, implicit_msbdf_agrees_with_rk8pd) { implicit_vs_rk8pd(CD_STEP_MSB
  * (GSL's default error handler is left on here, as an embedder would have
  * it: had the library let GSL call it, the test process would abort.)
  * ========================================================================== */
+Test(dynamics, all_finite_is_isfinite_over_the_array)
+{
+    /* cd_forward refuses a state or derivative with a non-finite entry by
+     * the exponent bits (cd_all_finite). It must say exactly what an isfinite
+     * loop says: for each special value (infinities, quiet, negative and
+     * signalling NaNs) at every position of arrays of 1 to 13 finite
+     * entries (the four-wide body and the tail), and for the finite extremes
+     * (0, -0, the smallest subnormal, DBL_MIN, DBL_MAX, -DBL_MAX) alone. */
+    const uint64_t bad_bits[] = {UINT64_C(0x7ff0000000000000), UINT64_C(0xfff0000000000000),
+                                 UINT64_C(0x7ff8000000000000), UINT64_C(0xfff8000000000000),
+                                 UINT64_C(0x7ff0000000000001), UINT64_C(0x7fffffffffffffff)};
+    const uint64_t good_bits[] = {UINT64_C(0), UINT64_C(0x8000000000000000), UINT64_C(1),
+                                  UINT64_C(0x0010000000000000), UINT64_C(0x7fefffffffffffff),
+                                  UINT64_C(0xffefffffffffffff)};
+    double a[13];
+    int n, pos, k, wrong = 0;
+    for (n = 1; n <= 13; n++) {
+        for (k = 0; k < n; k++) a[k] = 0.1 * k - 0.3;
+        if (!cd_all_finite(a, n)) wrong++;
+        for (pos = 0; pos < n; pos++)
+            for (k = 0; k < 6; k++) {
+                double save = a[pos], v;
+                memcpy(&v, &bad_bits[k], sizeof v);
+                a[pos] = v;
+                if (cd_all_finite(a, n) != 0) wrong++;
+                memcpy(&v, &good_bits[k], sizeof v);
+                a[pos] = v;
+                if (cd_all_finite(a, n) != 1 || !isfinite(v)) wrong++;
+                a[pos] = save;
+            }
+    }
+    cr_expect(cd_all_finite(a, 0) == 1, "an empty array is finite");
+    cr_expect_eq(wrong, 0, "%d verdicts differ from isfinite", wrong);
+}
+
 Test(dynamics, nan_user_wrench_returns_enumeric)
 {
     cd_model *m = pendulum_model(0.5, 0.0, CD_STEP_RK8PD);

@@ -58,19 +58,26 @@ cd_sys_state cd_state_of(const cd_model *m, const cd_data *d, int s)
     return r;
 }
 
+/* y index of body b's joint coordinate (qd: its rate), as sys_layout
+ * places it; called per joint in every evaluation, so without the views */
+static int joint_y(const cd_model *m, int b, int rate)
+{
+    int s = m->body_sys[b], a = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1, j = b - m->sys_body_adr[s] - 1;
+    int free_base = m->sys_base_type[s] == CD_BASE_FREE;
+    return a + (free_base ? 7 : 0) + (rate ? nj + (free_base ? 6 : 0) : 0) + j;
+}
+
 double cd_joint_q(const cd_model *m, const cd_data *d, int b)
 {
     if (!m || !d) return NAN;
-    int s = m->body_sys[b];
     if (m->body_parent[b] < 0) return 0.0;
-    return cd_state_of(m, d, s).q[b - m->sys_body_adr[s] - 1];
+    return d->y[joint_y(m, b, 0)];
 }
 
 double cd_joint_qd(const cd_model *m, const cd_data *d, int b)
 {
     if (!m || !d) return NAN;
-    int s = m->body_sys[b];
     if (m->body_parent[b] < 0) return 0.0;
-    return cd_state_of(m, d, s).qd[b - m->sys_body_adr[s] - 1];
+    return d->y[joint_y(m, b, 1)];
 }
 

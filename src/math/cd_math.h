@@ -10,9 +10,29 @@
 #define CD_MATH_H
 
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #define CD_PI 3.14159265358979323846
+
+/* 1 if every a[i] (i < n) is finite. Exactly !isfinite over the array, by
+ * the IEEE-754 bits: a double is Inf or NaN iff its 11 exponent bits are all
+ * ones, and then (bits & EXP) + 2^52 carries into bit 63; for every finite
+ * double it stays below 2^63. Branch-free integer work with four
+ * accumulators: the per-evaluation checks of y and ydot (over 1 000 unknowns
+ * with 432 contact slots) cost several times less than an isfinite loop. */
+static inline int cd_all_finite(const double *a, int n)
+{
+    const uint64_t EXP = UINT64_C(0x7ff0000000000000), ONE = UINT64_C(1) << 52;
+    uint64_t c0 = 0, c1 = 0, c2 = 0, c3 = 0, u0, u1, u2, u3;
+    int i = 0;
+    for (; i + 4 <= n; i += 4) {
+        memcpy(&u0, a + i, 8); memcpy(&u1, a + i + 1, 8); memcpy(&u2, a + i + 2, 8); memcpy(&u3, a + i + 3, 8);
+        c0 |= (u0 & EXP) + ONE; c1 |= (u1 & EXP) + ONE; c2 |= (u2 & EXP) + ONE; c3 |= (u3 & EXP) + ONE;
+    }
+    for (; i < n; i++) { memcpy(&u0, a + i, 8); c0 |= (u0 & EXP) + ONE; }
+    return !((c0 | c1 | c2 | c3) >> 63);
+}
 
 /* ---- 3-vectors ---------------------------------------------------------- */
 static inline void cd_v3_set(double r[3], double x, double y, double z) { r[0] = x; r[1] = y; r[2] = z; }

@@ -15,8 +15,7 @@ cd_status cd_forward(const cd_model *m, cd_data *d)
     int i, s, b;
     cd_status st = CD_OK;
     double *ysave = d->y;
-    for (i = 0; i < m->ny; i++)
-        if (!isfinite(d->y[i])) return CD_ENUMERIC;
+    if (!cd_all_finite(d->y, m->ny)) return CD_ENUMERIC;
     if (m->npresc) {
         /* prescribed joints and bases follow their profile exactly */
         memcpy(d->ypresc, d->y, (size_t)m->ny * sizeof(double));
@@ -59,8 +58,7 @@ cd_status cd_forward(const cd_model *m, cd_data *d)
             for (i = 0; i < nj; i++) yd[off + i] = x.qd[i];
             for (i = 0; i < m->sys_ndof[s]; i++) yd[off + nj + i] = d->udot[va + i];
         }
-        for (i = 0; i < m->ny; i++)
-            if (!isfinite(d->ydot[i])) { st = CD_ENUMERIC; break; }
+        if (!cd_all_finite(d->ydot, m->ny)) st = CD_ENUMERIC;
     }
     d->y = ysave;
     return st;
