@@ -23,6 +23,7 @@
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include "scene_util.h"
+#include "../src/contact/geometry.h" /* cd_geom_hull: the plane bound of open slots */
 #include <math.h>
 #include <string.h>
 
@@ -419,6 +420,24 @@ static cd_model *hull_model(const double *v, int nv)
     return t;
 }
 
+/* number of face planes by face_run (its runs must tile the triangles, each
+ * run's planes bitwise equal); -1 if they do not */
+static int hull_planes(const cd_model *t)
+{
+    int f = 0, np = 0, nf = t->shape_face_num[0], fa = t->shape_face_adr[0];
+    while (f < nf) {
+        int r = t->face_run[fa + f], j;
+        if (r < 1 || f + r > nf) return -1;
+        for (j = f + 1; j < f + r; j++)
+            if (t->face_run[fa + j] != 0 ||
+                memcmp(t->face_plane + 4 * (fa + j), t->face_plane + 4 * (fa + f), 4 * sizeof(double)))
+                return -1;
+        f += r;
+        np++;
+    }
+    return np;
+}
+
 /* total area of the face triangles; counts those not wound outward (by
  * their stored plane) or of zero area */
 static double hull_area(const cd_model *t, int *bad)
@@ -448,8 +467,9 @@ Test(contact_geometry, hull_faces_tile_the_surface_once)
      * centres add none). Cases: a cube, the same cube with every edge
      * midpoint and face centre added, and the lopsided pentagonal prism of
      * scenarios/soft_wrap.toml (5 rectangles of 2 triangles, 2 pentagons of 3:
-     * 16). Every coplanar triple of the prism would give 40 overlapping
-     * triangles, and the query time grows with their number. */
+     * 16), each face plane once (face_run: 6 and 7). Every coplanar triple
+     * of the prism would give 40 overlapping triangles, and the query time
+     * grows with their number. */
     double cube[3 * 26], prism[30], area, pent = 0, perim = 0, prism_area;
     int nc = 0, i, j, k, bad;
     cd_model *t;
@@ -473,6 +493,7 @@ Test(contact_geometry, hull_faces_tile_the_surface_once)
         t = hull_model(corners, 8);
         area = hull_area(t, &bad);
         cr_expect_eq(t->shape_face_num[0], 12, "a cube: %d triangles, expected 12", t->shape_face_num[0]);
+        cr_expect_eq(hull_planes(t), 6, "a cube: %d face planes by face_run, expected 6", hull_planes(t));
         cr_expect_eq(bad, 0, "%d triangles not wound outward", bad);
         cr_expect_leq(fabs(area - 6 * 0.04) / 0.24, 1e-12, "cube area %.17g, expected 0.24", area);
         cd_model_free(t);
@@ -500,6 +521,7 @@ Test(contact_geometry, hull_faces_tile_the_surface_once)
         t = hull_model(prism, 10);
         area = hull_area(t, &bad);
         cr_expect_eq(t->shape_face_num[0], 16, "the soft_wrap prism: %d triangles, expected 16", t->shape_face_num[0]);
+        cr_expect_eq(hull_planes(t), 7, "the prism: %d face planes by face_run, expected 7", hull_planes(t));
         cr_expect_eq(bad, 0, "%d triangles not wound outward", bad);
         cr_expect_leq(fabs(area - prism_area) / prism_area, 1e-12, "prism area %.17g, expected %.17g", area, prism_area);
         cd_model_free(t);
@@ -537,21 +559,20 @@ static void tri_closest(const double p[3], const double a[3], const double b[3],
 #undef DOT3
 }
 
-Test(contact_geometry, hull_query_outside_equals_the_scan_over_every_face)
+/* A finalized model of one fixed system holding the hull of 300 random
+ * points on the ellipsoid of semi-axes 0.3, 0.2, 0.12 m (hundreds of faces),
+ * drawn from seed; *sh its shape. */
+static cd_model *ellipsoid_hull(unsigned long long seed, int *sh)
 {
-    /* A hull of 300 random points on an ellipsoid (hundreds of faces): for
-     * 3000 random outside points the query, which only looks at faces that
-     * face p and stops at faces no nearer than its best, must give the
-     * distance of the brute-force minimum over every face triangle, to 1e-12. */
     cd_model *m = cd_model_create();
     cd_system_desc s = cd_system_desc_default();
     cd_error e;
-    double verts[3 * 300], worst = 0;
-    int sys, sh, i, k, nout = 0;
+    double verts[3 * 300];
+    int sys, i, k;
     s.type = CD_BASE_FIXED;
     s.name = "hull";
     sys = cd_model_add_system(m, &s, &e);
-    rng_state = 0x853C49E6748FEA9BULL;
+    rng_state = seed;
     for (i = 0; i < 300; i++) {
         double u[3], n;
         do {
@@ -560,9 +581,21 @@ Test(contact_geometry, hull_query_outside_equals_the_scan_over_every_face)
         } while (n < 0.1 || n > 1.0);
         verts[3 * i] = 0.3 * u[0] / n; verts[3 * i + 1] = 0.2 * u[1] / n; verts[3 * i + 2] = 0.12 * u[2] / n;
     }
-    sh = cd_model_add_shape(m, m->sys_body_adr[sys], CD_SHAPE_CONVEX, NULL, NULL, NULL, verts, 300, &e);
-    cr_assert(sh >= 0, "%s", e.msg);
+    *sh = cd_model_add_shape(m, m->sys_body_adr[sys], CD_SHAPE_CONVEX, NULL, NULL, NULL, verts, 300, &e);
+    cr_assert(*sh >= 0, "%s", e.msg);
     cr_assert_eq(cd_model_finalize(m, &e), CD_OK, "%s", e.msg);
+    return m;
+}
+
+Test(contact_geometry, hull_query_outside_equals_the_scan_over_every_face)
+{
+    /* A hull of 300 random points on an ellipsoid (hundreds of faces): for
+     * 3000 random outside points the query, which only looks at faces that
+     * face p and stops at faces no nearer than its best, must give the
+     * distance of the brute-force minimum over every face triangle, to 1e-12. */
+    double worst = 0;
+    int sh, i, k, nout = 0;
+    cd_model *m = ellipsoid_hull(0x853C49E6748FEA9BULL, &sh);
     cr_log_info("hull: %d faces", m->shape_face_num[sh]);
     for (i = 0; i < 3000; i++) {
         double p[3], d, n[3], sp[3], best = HUGE_VAL;
@@ -583,6 +616,52 @@ Test(contact_geometry, hull_query_outside_equals_the_scan_over_every_face)
     cr_log_info("%d outside points, largest difference to the full scan %.3g m", nout, worst);
     cr_expect_gt(nout, 1000, "most sample points are outside the hull");
     cr_expect_leq(worst, 1e-12, "pruned query vs full scan: %.3g m", worst);
+    cd_model_free(m);
+}
+
+Test(contact_geometry, hull_plane_bound_is_a_lower_bound_beyond_the_margin)
+{
+    /* An open slot's hull query stops at the face planes when one of them is
+     * farther than r + 1e-6 (cd_geom_hull's `beyond`): it reports the largest
+     * plane distance, which no point of the hull can beat (the hull lies
+     * behind each plane). On 4000 random points around a 300-vertex hull,
+     * for three thresholds: a bounded answer is above the threshold and at
+     * most the exact distance (1e-15), its point lies on its plane (1e-15);
+     * an exact answer is bit for bit the unbounded query's. */
+    double worst_plane = 0;
+    static const double beyond[3] = {1e-3, 1e-2, 5e-2};
+    int sh, i, k, b, nbound = 0, nexact = 0, bad = 0;
+    cd_model *m = ellipsoid_hull(0x2545F4914F6CDD1DULL, &sh);
+    for (i = 0; i < 4000; i++) {
+        const int fa = m->shape_face_adr[sh], nf = m->shape_face_num[sh];
+        static const double box[3] = {0.36, 0.26, 0.18}; /* the hull's semi-axes + 6 cm */
+        double p[3], dx, nx[3], sx[3];
+        for (k = 0; k < 3; k++) p[k] = (2.0 * urand() - 1.0) * box[k];
+        cr_assert_eq(cd_geom_hull(m->vert, m->face_vert + 3 * fa, m->face_plane + 4 * fa, m->face_run + fa, nf, p,
+                                  HUGE_VAL, &dx, nx, sx), 0);
+        for (b = 0; b < 3; b++) {
+            double db, nb[3], sb[3];
+            int st = cd_geom_hull(m->vert, m->face_vert + 3 * fa, m->face_plane + 4 * fa, m->face_run + fa, nf, p,
+                                  beyond[b], &db, nb, sb);
+            if (st == 1) {
+                double off = fabs(nb[0] * sb[0] + nb[1] * sb[1] + nb[2] * sb[2] -
+                                  (nb[0] * p[0] + nb[1] * p[1] + nb[2] * p[2] - db));
+                nbound++;
+                if (!(db > beyond[b]) || db > dx + 1e-15) bad++;
+                if (off > worst_plane) worst_plane = off;
+            } else if (st == 0) {
+                nexact++;
+                if (db != dx || memcmp(nb, nx, sizeof nb) || memcmp(sb, sx, sizeof sb)) bad++;
+            } else {
+                bad++;
+            }
+        }
+    }
+    cr_log_info("%d bounded and %d exact answers, largest off-plane %.3g m", nbound, nexact, worst_plane);
+    cr_expect_gt(nbound, 1000, "the bound is taken for far points");
+    cr_expect_gt(nexact, 1000, "near and inside points get the exact query");
+    cr_expect_eq(bad, 0, "%d answers break the bound or differ from the exact query", bad);
+    cr_expect_leq(worst_plane, 1e-15, "the bound's point is on its plane: %.3g", worst_plane);
     cd_model_free(m);
 }
 

@@ -404,6 +404,8 @@ typedef struct cd_model {
     int *shape_face_adr, *shape_face_num;
     int *face_vert;       /* (nface x 3) vertex indices (into vert) of a face triangle */
     double *face_plane;   /* (nface x 4) outward unit normal and offset: n.p = o on the face */
+    int *face_run;        /* (nface) the triangles of one face plane are consecutive: at the first,
+                           * how many share its plane (bitwise); 0 at the others */
 
     /* contact laws and pairs (check points of a system/body x one shape) */
     cd_contact_law *law;

@@ -50,8 +50,22 @@ static void shape_poses(const cd_model *m, cd_data *d)
     }
 }
 
-/* query in world coordinates (n, s in world); returns 0, or -1 for a rejected (non-finite) answer */
-static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r,
+/* The query in the shape frame: exact (0), or, for a hull farther than
+ * `beyond` from one of its face planes, that plane's distance (1: a lower
+ * bound, cd_geom_hull); -1 for a rejected (non-finite) answer. */
+static int shape_query(const cd_model *m, int sh, const double p[3], double beyond, double *dist, double n[3],
+                       double s[3])
+{
+    int fa = m->shape_face_adr[sh];
+    if (m->shape_type[sh] == CD_SHAPE_CONVEX)
+        return cd_geom_hull(m->vert, m->face_vert + 3 * fa, m->face_plane + 4 * fa, m->face_run + fa,
+                            m->shape_face_num[sh], p, beyond, dist, n, s);
+    return cd_geom_analytic(m->shape_type[sh], m->shape_size + 3 * sh, p, dist, n, s);
+}
+
+/* query in world coordinates (n, s in world); returns 0 (exact), 1 (a hull's
+ * plane bound beyond `beyond`, see shape_query) or -1 for a rejected answer */
+static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double beyond,
                        double *dist, double n[3], double s[3])
 {
     const double *R = d->shape_R + 9 * sh, *x = d->shape_xw + 3 * sh;
@@ -59,8 +73,8 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
     int res;
     cd_v3_sub(t, pw, x);
     cd_m3_tmulv(pl, R, t);
-    res = cd_shape_distance(m, sh, pl, r, dist, nl, sl);
-    if (res == 0) {
+    res = shape_query(m, sh, pl, beyond, dist, nl, sl);
+    if (res >= 0) {
         cd_m3_mulv(n, R, nl);
         cd_m3_mulv(t, R, sl);
         cd_v3_add(s, x, t);
@@ -96,12 +110,8 @@ int cd_shape_distance(const cd_model *m, int shape, const double p[3], double ra
                       double *dist, double n[3], double s[3])
 {
     if (!m || !p || !dist || !n || !s) return -1;
-    int type = m->shape_type[shape], fa = m->shape_face_adr[shape];
     (void)radius;
-    if (type == CD_SHAPE_CONVEX)
-        return cd_geom_hull(m->vert, m->face_vert + 3 * fa, m->face_plane + 4 * fa, m->shape_face_num[shape], p,
-                            dist, n, s);
-    return cd_geom_analytic(type, m->shape_size + 3 * shape, p, dist, n, s);
+    return shape_query(m, shape, p, HUGE_VAL, dist, n, s);
 }
 
 int cd_shape_distance_ccd(const cd_model *m, int shape, const double p[3], double radius,
@@ -142,7 +152,7 @@ static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, d
     double r = m->cp_radius[cp], dist;
     cd_point_world(m, d, m->cp_body[cp], m->cp_pos + 3 * cp, pw, NULL);
     if (open && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
-    else res = query_world(m, d, sh, pw, r, &dist, n, s);
+    else if ((res = query_world(m, d, sh, pw, open ? r + CD_BROAD_MARGIN : HUGE_VAL, &dist, n, s)) == 1) res = 0;
     if (res == 0) *x = r - dist;
     return res;
 }
@@ -235,7 +245,7 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
         *xb = R - dist;
         return 1;
     }
-    if (query_world(m, d, sh, cw, R, &dist, n, s) != 0) return 0;
+    if (query_world(m, d, sh, cw, R + CD_BROAD_MARGIN, &dist, n, s) < 0) return 0;
     *xb = R - dist;
     return single ? *xb < 0 : *xb < -CD_BROAD_MARGIN;
 }

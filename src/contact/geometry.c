@@ -162,19 +162,30 @@ static void closest_on_triangle(const double p[3], const double a[3], const doub
     cd_v3_copy(q, a); cd_v3_axpy(q, v, ab); cd_v3_axpy(q, w, ac);
 }
 
-int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, const double p[3], double *d,
-                 double n[3], double s[3])
+int cd_geom_hull(const double *vert, const int *fv, const double *fp, const int *run, int nf, const double p[3],
+                 double beyond, double *d, double n[3], double s[3])
 {
     enum { HULL_H_CACHE = 64 };
-    double hc[HULL_H_CACHE];
-    int f, best = 0;
+    double hc[HULL_H_CACHE]; /* the plane distance of run k (the k-th plane) */
+    int f, k, r, best = 0;
     double hmax = -HUGE_VAL;
     if (!cd_v3_isfinite(p)) return -1;
-    /* inside (or on) the hull: the signed distance is the largest plane distance */
-    for (f = 0; f < nf; f++) {
+    /* inside (or on) the hull: the signed distance is the largest plane
+     * distance, one per face plane (run: its triangles share it bitwise) */
+    for (f = 0, k = 0; f < nf; f += r, k++) {
         double h = cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
-        if (f < HULL_H_CACHE) hc[f] = h;
+        r = run && run[f] > 0 ? run[f] : 1;
+        if (k < HULL_H_CACHE) hc[k] = h;
         if (h > hmax) { hmax = h; best = f; }
+    }
+    if (hmax > beyond) {
+        /* farther than asked from some face plane: its distance is a lower
+         * bound of the true one (the hull lies behind every plane) */
+        *d = hmax;
+        cd_v3_copy(n, fp + 4 * best);
+        cd_v3_copy(s, p);
+        cd_v3_axpy(s, -hmax, n);
+        return (isfinite(*d) && cd_v3_isfinite(s)) ? 1 : -1;
     }
     if (hmax <= 0) {
         *d = hmax;
@@ -200,13 +211,19 @@ int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, co
         cd_v3_sub(t, p, q);
         dmin = cd_v3_dot(t, t);
         cd_v3_copy(s, q);
-        for (f = 0; f < nf && dmin > hmax * hmax; f++) {
-            double dd, h = f < HULL_H_CACHE ? hc[f] : cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
-            if (f == best || h <= 0 || h * h >= dmin) continue;
-            closest_on_triangle(p, vert + 3 * fv[3 * f], vert + 3 * fv[3 * f + 1], vert + 3 * fv[3 * f + 2], q);
-            cd_v3_sub(t, p, q);
-            dd = cd_v3_dot(t, t);
-            if (dd < dmin) { dmin = dd; cd_v3_copy(s, q); }
+        for (f = 0, k = 0; f < nf && dmin > hmax * hmax; f += r, k++) {
+            double h = k < HULL_H_CACHE ? hc[k] : cd_v3_dot(fp + 4 * f, p) - fp[4 * f + 3];
+            int j;
+            r = run && run[f] > 0 ? run[f] : 1;
+            if (h <= 0 || h * h >= dmin) continue; /* no triangle of this plane can be nearer */
+            for (j = f; j < f + r; j++) {
+                double dd;
+                if (j == best) continue;
+                closest_on_triangle(p, vert + 3 * fv[3 * j], vert + 3 * fv[3 * j + 1], vert + 3 * fv[3 * j + 2], q);
+                cd_v3_sub(t, p, q);
+                dd = cd_v3_dot(t, t);
+                if (dd < dmin) { dmin = dd; cd_v3_copy(s, q); }
+            }
         }
         *d = sqrt(dmin);
         cd_v3_sub(n, p, s);

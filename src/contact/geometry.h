@@ -10,9 +10,15 @@ int cd_geom_analytic(int type, const double size[3], const double p[3], double *
 /* Exact signed distance of point p (shape frame) to the convex hull given by
  * nf face triangles fv (indices into vert) with outward planes fp (n, o):
  * inside, the largest plane distance; outside, the nearest face triangle.
- * Returns 0, or -1 if not finite. */
-int cd_geom_hull(const double *vert, const int *fv, const double *fp, int nf, const double p[3], double *d,
-                 double n[3], double s[3]);
+ * run (may be NULL: a plane per triangle): at a face's first triangle, the
+ * number of consecutive triangles sharing its plane bitwise, 0 at the
+ * others (cd_model.face_run); each plane's distance is computed once.
+ * When some plane distance exceeds `beyond` (HUGE_VAL: never), the largest
+ * one is returned instead (a lower bound of d; n that plane's normal, s the
+ * foot of p on it) with status 1, and no triangle is visited.
+ * Returns 0 (exact), 1 (the plane bound) or -1 if not finite. */
+int cd_geom_hull(const double *vert, const int *fv, const double *fp, const int *run, int nf, const double p[3],
+                 double beyond, double *d, double n[3], double s[3]);
 
 /* libccd query of a sphere (centre p, radius r) against a shape (any type but
  * plane); d is the distance of the centre to the surface (r - depth), n the

@@ -241,7 +241,7 @@ void cd_model_free(cd_model *m)
     free(m->cp_body); free(m->cp_pos); free(m->cp_radius);
     free(m->shape_body); free(m->shape_type); free(m->shape_pos); free(m->shape_rot);
     free(m->shape_size); free(m->shape_vert_adr); free(m->shape_vert_num); free(m->vert); free(m->shape_rbound);
-    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
+    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane); free(m->face_run);
     free(m->law); free(m->pair_sys); free(m->pair_body); free(m->pair_shape); free(m->pair_law);
     free(m->group_adr); free(m->group_num); free(m->group_pos); free(m->group_radius);
     free(m->slot_cp); free(m->slot_shape); free(m->slot_law);
@@ -1257,6 +1257,7 @@ static int hull_faces(cd_model *m, int sh, int store, int at)
                         m->face_vert[3 * f + 2] = m->shape_vert_adr[sh] + on[ch[a + 1]];
                         cd_v3_copy(m->face_plane + 4 * f, n);
                         m->face_plane[4 * f + 3] = o;
+                        m->face_run[f] = a == 1 ? nh - 2 : 0;
                     }
                     nf++;
                 }
@@ -1481,9 +1482,10 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
      * except, inside one system, check points on the shape's own body and on
      * the bodies jointed to it (they touch at the joint by construction);
      * later pairs do not duplicate a slot (build_slots) */
-    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane);
+    free(m->shape_face_adr); free(m->shape_face_num); free(m->face_vert); free(m->face_plane); free(m->face_run);
     m->shape_face_adr = m->shape_face_num = m->face_vert = NULL;
     m->face_plane = NULL;
+    m->face_run = NULL;
     {
         cd_status sst = build_slots(m, ny, err);
         if (sst != CD_OK) return sst;
@@ -1509,7 +1511,8 @@ cd_status cd_model_finalize(cd_model *m, cd_error *err)
         }
     m->face_vert = malloc((size_t)(m->nface ? m->nface : 1) * 3 * sizeof(int));
     m->face_plane = malloc((size_t)(m->nface ? m->nface : 1) * 4 * sizeof(double));
-    if (!m->face_vert || !m->face_plane) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
+    m->face_run = malloc((size_t)(m->nface ? m->nface : 1) * sizeof(int));
+    if (!m->face_vert || !m->face_plane || !m->face_run) { seterr(err, CD_ENOMEM, "out of memory"); return CD_ENOMEM; }
     for (i = 0; i < m->nshape; i++)
         if (m->shape_type[i] == CD_SHAPE_CONVEX && hull_faces(m, i, 1, m->shape_face_adr[i]) != m->shape_face_num[i]) {
             seterr(err, CD_ENOMEM, "out of memory");
