@@ -471,7 +471,10 @@ static int one_step(cd_integ *I, double t, double h, double *y)
 {
     gsl_odeiv2_step *loc = I->stiff ? I->loc_stiff : I->loc;
     if (I->fixed) return rk4_step(I, t, h, y, 0);
-    gsl_odeiv2_step_reset(loc);
+    /* a Rosenbrock locator starts afresh; GSL's rk8pd keeps nothing between
+     * steps (called without dydt_in, it writes every scratch array before it
+     * reads it), and its reset, which zeroes 13 stage vectors, is skipped */
+    if (I->stiff || rosenbrock(I->stepper)) gsl_odeiv2_step_reset(loc);
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
