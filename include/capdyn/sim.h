@@ -1,7 +1,8 @@
 /* capdyn: simulation data (cd_data), kinematics, dynamics, contact and the
  * event-driven integrator. Everything here works on a finalized cd_model and
  * a cd_data created from it; no call allocates after cd_data_create() except
- * the implicit GSL steppers (rk4imp, msbdf), which allocate inside GSL. */
+ * GSL's implicit stepper msbdf, which allocates inside GSL (rk4imp is
+ * capdyn's own since it replaced GSL's and allocates nothing). */
 #ifndef CAPDYN_SIM_H
 #define CAPDYN_SIM_H
 

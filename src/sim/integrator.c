@@ -38,6 +38,7 @@
 #include "../mechanism/actuation.h"
 #include "../kinematics/prescribed.h"
 #include "integ.h"
+#include "gauss4.h"
 #include "rosw.h"
 #include "switch.h"
 
@@ -112,6 +113,7 @@ typedef struct {
     int fixed, history;       /* fixed-step mode; the stepper keeps a history (msbdf, rk4imp) */
     cd_stepper stepper;       /* the one the GSL objects were made for */
     cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
+    cd_gauss4 g4;             /* rk4imp: its stage and iteration-matrix buffers (its Jacobian: rw) */
     /* auto: drv->s and loc are rk8pd; the stiff pair below is ros34pw2 */
     gsl_odeiv2_step *s_stiff, *loc_stiff;
     int autom;                /* stepper is CD_STEP_AUTO */
@@ -142,7 +144,7 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
-/* Finite-difference Jacobian for the implicit steppers (rk4imp, msbdf). */
+/* Finite-difference Jacobian for GSL's implicit stepper msbdf. */
 static int jac(double t, const double y[], double *dfdy, double dfdt[], void *params)
 {
     cd_integ *I = (cd_integ *)params;
@@ -184,9 +186,13 @@ static int rosenbrock(cd_stepper s) { return s == CD_STEP_ROS34PW2 || s == CD_ST
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
-    /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2 buffers */
+    /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2
+     * buffers (also rk4imp's Jacobian), then rk4imp's own */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO ? cd_rosw_size(m) : 0);
+           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RK4IMP
+                ? cd_rosw_size(m)
+                : 0) +
+           (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -219,7 +225,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
     case CD_STEP_RK8PD: T = gsl_odeiv2_step_rk8pd; break;
-    case CD_STEP_RK4IMP: T = gsl_odeiv2_step_rk4imp; break;
+    case CD_STEP_RK4IMP: T = cd_step_gauss4; break; /* capdyn's own (gauss4.c): GSL's allocates in every step */
     case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
     case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
     case CD_STEP_RODAS4: T = cd_step_rodas4; break;
@@ -239,6 +245,11 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_rosw_init(&I->rw, m, d, p + 1);
             cd_rosw_bind(I->drv->s, &I->rw, 0);
             cd_rosw_bind(I->loc, &I->rw, 1);
+        }
+        if (d->opt.stepper == CD_STEP_RK4IMP) {
+            cd_rosw_init(&I->rw, m, d, p + 1);
+            cd_gauss4_init(&I->g4, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
+            cd_gauss4_bind(I->drv->s, &I->g4);
         }
         if (I->autom) {
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);

@@ -97,10 +97,19 @@ static const rosw_tab TAB_RODAS4 = {
     {2.4286337654669881, -0.38274873376478435, -1.8557203309295804, 0.55983529922737629, 0.25, 0},
     {0.25, -0.1043, 0.1035, -0.0362, 0, 0}};
 
+static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys, int exact);
+
 static int na_capacity(const cd_model *m)
 {
     int ns = m->nslot < CD_ROSW_MAX_SLOTS ? m->nslot : CD_ROSW_MAX_SLOTS;
     return m->ny_slot_adr + 3 * ns + m->nfric;
+}
+
+int cd_rosw_na_max(const cd_model *m) { return na_capacity(m); }
+
+int cd_rosw_jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys)
+{
+    return jacobian(w, t, y, f0, sys, 0);
 }
 
 size_t cd_rosw_size(const cd_model *m)
@@ -272,7 +281,7 @@ static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, con
         if (GSL_ODEIV_FN_EVAL(sys, t + dt, y, w->fd) != GSL_SUCCESS) return GSL_EBADFUNC;
         for (c = 0; c < n; c++) w->ft[c] = (w->fd[c] - f0[c]) / dt;
     }
-    if (!exact && w->d->opt.jacobian == CD_JAC_MODEL) {
+    if (!exact && w->d && w->d->opt.jacobian == CD_JAC_MODEL) {
         if (cd_jac_model(w->m, w->d, t, y, w->act, na, w->J, &w->jw) != CD_OK) return GSL_EBADFUNC;
         reduce(w);
         goto done;
@@ -300,7 +309,7 @@ done:
  * Golub & Van Loan alg. 3.4.1): no allocation, unlike gsl_linalg_LU_decomp,
  * whose recursive blocked variant allocates. piv[k]: the row swapped with k.
  * Returns -1 on a zero or non-finite pivot. */
-static int lu_decomp(double *A, int n, int *piv)
+int cd_rosw_lu_decomp(double *A, int n, int *piv)
 {
     int i, j, k;
     for (k = 0; k < n; k++) {
@@ -328,7 +337,7 @@ static int lu_decomp(double *A, int n, int *piv)
     return 0;
 }
 
-static void lu_solve(const double *A, int n, const int *piv, double *b)
+void cd_rosw_lu_solve(const double *A, int n, const int *piv, double *b)
 {
     int i, j;
     for (i = 0; i < n; i++)
@@ -357,7 +366,7 @@ static int factor(cd_rosw *w, double h)
             for (j = 0; j < nU; j++)
                 w->W[(size_t)i * nU + j] = (i == j ? 1.0 : 0.0) - c * w->J[(size_t)w->iU[i] * na + w->iU[j]] -
                                            c * c * w->M2[(size_t)i * nU + j];
-        if (nU && lu_decomp(w->W, nU, w->perm) != 0) return GSL_FAILURE;
+        if (nU && cd_rosw_lu_decomp(w->W, nU, w->perm) != 0) return GSL_FAILURE;
         w->lu_ok = 1;
         w->lu_h = h;
         return GSL_SUCCESS;
@@ -365,7 +374,7 @@ static int factor(cd_rosw *w, double h)
     for (i = 0; i < na * na; i++) w->W[i] = -h * w->gam * w->J[i];
     for (i = 0; i < na; i++) w->W[i * na + i] += 1.0;
     if (na == 0) { w->lu_ok = 1; w->lu_h = h; return GSL_SUCCESS; }
-    if (lu_decomp(w->W, na, w->perm) != 0) return GSL_FAILURE;
+    if (cd_rosw_lu_decomp(w->W, na, w->perm) != 0) return GSL_FAILURE;
     for (i = 0; i < na; i++)
         if (!(fabs(w->W[i * na + i]) > 0) || !isfinite(w->W[i * na + i])) return GSL_FAILURE;
     w->lu_ok = 1;
@@ -379,7 +388,7 @@ static int solve_active(cd_rosw *w, double *r)
     int na = w->na, i, k;
     double c = w->lu_h * w->gam, *u = w->tu;
     if (!w->red) {
-        lu_solve(w->W, na, w->perm, r);
+        cd_rosw_lu_solve(w->W, na, w->perm, r);
         return GSL_SUCCESS;
     }
     for (i = 0; i < w->nU; i++) {
@@ -389,7 +398,7 @@ static int solve_active(cd_rosw *w, double *r)
         for (k = 0; k < w->nZ; k++) acc += Ju[w->iZ[k]] * r[w->iZ[k]];
         u[i] = r[w->iU[i]] + c * acc;
     }
-    if (w->nU) lu_solve(w->W, w->nU, w->perm, u);
+    if (w->nU) cd_rosw_lu_solve(w->W, w->nU, w->perm, u);
     for (k = 0; k < w->nP; k++) {
         const double *Jp = w->J + (size_t)w->iP[k] * na;
         double acc = 0;

@@ -69,6 +69,19 @@ void cd_rosw_invalidate(cd_rosw *w);
  * the evaluation fails. Uses the stage buffers (between steps only). */
 double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y);
 
+/* For the Gauss stepper (gauss4.c), which uses this workspace's Jacobian:
+ * the active set's capacity; the Jacobian of a ros34pw2 step (no df/dt:
+ * simulation.jacobian's structured one, reduce()d, or the forward difference
+ * on the active set; plain: the system's own or forward differences) formed
+ * at (t, y) with f0 = f(t, y) into w->J (w->na x w->na, row-major, on w->act);
+ * GSL_EBADFUNC if an evaluation fails. */
+int cd_rosw_na_max(const cd_model *m);
+int cd_rosw_jacobian(cd_rosw *w, double t, const double *y, const double *f0, const gsl_odeiv2_system *sys);
+/* In-place LU with partial pivoting of a row-major n x n matrix (no
+ * allocation); -1 on a zero or non-finite pivot. And its solve, b in place. */
+int cd_rosw_lu_decomp(double *A, int n, int *piv);
+void cd_rosw_lu_solve(const double *A, int n, const int *piv, double *b);
+
 /* The GSL stepper type. Each step object must be bound to the workspace;
  * a locator's steps share the Jacobian of the main stepper's step start and
  * never invalidate it. */

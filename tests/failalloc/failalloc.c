@@ -18,6 +18,10 @@
  * and in both cases every allocation of the run is freed (allocations still
  * live after it == before it). A crash, an abort, a leak or any other status
  * fails the test. Exit status 0 when all N pass; the summary on stdout.
+ * The whole first part runs twice: with the scene's integrator and with
+ * simulation.integrator = "rk4imp" (capdyn's Gauss stepper, src/sim/gauss4.c,
+ * which replaced GSL's: that one allocated in every step and aborted when an
+ * allocation failed).
  *
  * One exception, found by this test: Debian's toml++ 3.3 (libtomlplusplus.so)
  * calls std::terminate when an allocation fails inside its parser (the
@@ -210,17 +214,18 @@ void free(void *p)
 
 /* ---- the work ---- */
 static char g_scene[4096];
+static const char *g_integ; /* an integrator override ("simulation.integrator=..."), NULL: the scene's */
 
 /* load + create + run; returns the status, msg filled on error */
 static cd_status work(char *msg, size_t len)
 {
-    static const char *const ov[] = {"simulation.duration=0.02"};
+    const char *ov[2] = {"simulation.duration=0.02", g_integ};
     cd_error err;
     cd_scenario *sc;
     cd_data *d;
     cd_status st;
     msg[0] = 0;
-    sc = cd_scenario_load(g_scene, ov, 1, &err);
+    sc = cd_scenario_load(g_scene, ov, g_integ ? 2 : 1, &err);
     if (!sc) {
         snprintf(msg, len, "%s", err.msg);
         return err.status;
@@ -401,28 +406,14 @@ static int test_writer(void)
     return bad ? 1 : 0;
 }
 
-int main(void)
+/* The work once with every allocation granted (the count), then with each
+ * failing in turn; returns the bad runs (or 1 if the counting run fails). */
+static long fail_each(void)
 {
-    const char *root = getenv("CAPDYN_ROOT");
     char msg[1024];
     long total, n, ok = 0, enomem = 0, eio = 0, bad = 0, before;
     cd_status st;
-    void *fr[4];
-    gsl_set_error_handler_off(); /* GSL's default handler aborts on a failed allocation */
-    (void)backtrace(fr, 4);      /* its one-time set-up, before counting */
-    snprintf(g_scene, sizeof g_scene, "%s/tests/failalloc/scene.toml", root && *root ? root : ".");
-
-    /* warm-up (one-time allocations of the libraries), then the count */
-    st = work(msg, sizeof msg);
-    if (st != CD_OK) {
-        printf("failalloc: the scenario does not run: %s\n", msg);
-        return 1;
-    }
-    dl_iterate_phdr(find_toml, NULL);
-    if (g_ntoml == 0) {
-        printf("failalloc: libtomlplusplus is not loaded (linked statically?): update this test\n");
-        return 1;
-    }
+    g_in_toml = g_in_gsl = 0;
     before = g_live;
     g_count = 0;
     g_fail_at = 0;
@@ -434,7 +425,6 @@ int main(void)
         printf("failalloc: the counting run failed (%s) or leaked %ld allocations\n", msg, g_live - before);
         return 1;
     }
-
     for (n = 1; n <= total; n++) {
         if (getenv("FAILALLOC_TRACE")) fprintf(stderr, "failalloc: failing allocation %ld\n", n);
         before = g_live;
@@ -464,9 +454,40 @@ int main(void)
             bad++;
         }
     }
-    printf("failalloc: %ld allocations in load + create + run; failing each: %ld CD_ENOMEM, %ld CD_EIO (out of memory "
+    printf("failalloc: %s%ld allocations in load + create + run; failing each: %ld CD_ENOMEM, %ld CD_EIO (out of memory "
            "opening a file), %ld still succeed (of which %ld inside toml++ and %ld inside GSL's control set-up, "
            "granted), %ld bad\n",
-           total, enomem, eio, ok, g_in_toml, g_in_gsl, bad);
+           g_integ ? "rk4imp: " : "", total, enomem, eio, ok, g_in_toml, g_in_gsl, bad);
+    return bad;
+}
+
+int main(void)
+{
+    const char *root = getenv("CAPDYN_ROOT");
+    char msg[1024];
+    long bad;
+    cd_status st;
+    void *fr[4];
+    gsl_set_error_handler_off(); /* GSL's default handler aborts on a failed allocation */
+    (void)backtrace(fr, 4);      /* its one-time set-up, before counting */
+    snprintf(g_scene, sizeof g_scene, "%s/tests/failalloc/scene.toml", root && *root ? root : ".");
+
+    /* warm-up (one-time allocations of the libraries), then the count */
+    st = work(msg, sizeof msg);
+    if (st != CD_OK) {
+        printf("failalloc: the scenario does not run: %s\n", msg);
+        return 1;
+    }
+    dl_iterate_phdr(find_toml, NULL);
+    if (g_ntoml == 0) {
+        printf("failalloc: libtomlplusplus is not loaded (linked statically?): update this test\n");
+        return 1;
+    }
+    bad = fail_each();
+    /* rk4imp (capdyn's Gauss stepper): its workspace comes with the data,
+     * its steps allocate nothing */
+    g_integ = "simulation.integrator=\"rk4imp\"";
+    bad += fail_each();
+    g_integ = NULL;
     return test_writer() || bad ? 1 : 0;
 }
