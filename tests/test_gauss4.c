@@ -7,47 +7,13 @@
  * tests/test_invariants.c (no_allocation_in_steps_and_events). The
  * model-free tests drive the GSL step type directly on a workspace without a
  * model (cd_rosw_init_plain + cd_gauss4_init_plain). */
-#include <criterion/criterion.h>
-#include <capdyn/capdyn.h>
-#include <capdyn/io.h>
+#include "stepper_util.h"
 #include "../src/sim/gauss4.h"
 
 #include <gsl/gsl_errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-static const char *root(void)
-{
-    const char *r = getenv("CAPDYN_ROOT");
-    return r && *r ? r : ".";
-}
-
-/* The smooth non-autonomous nonlinear system of tests/test_ros4.c, with the
- * known solution u1 = 2 + sin t, u2 = exp(-t/2):
- *   y1' = -y1^2 + y2 + g1(t),  y2' = -y1 y2 + g2(t),
- *   g1 = cos t + u1^2 - u2,    g2 = -u2/2 + u1 u2. */
-static void exact(double t, double *u) { u[0] = 2.0 + sin(t); u[1] = exp(-0.5 * t); }
-
-static int smooth_f(double t, const double y[], double f[], void *p)
-{
-    double u[2];
-    (void)p;
-    exact(t, u);
-    f[0] = -y[0] * y[0] + y[1] + cos(t) + u[0] * u[0] - u[1];
-    f[1] = -y[0] * y[1] - 0.5 * u[1] + u[0] * u[1];
-    return GSL_SUCCESS;
-}
-
-static int smooth_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    (void)t;
-    (void)p;
-    J[0] = -2.0 * y[0]; J[1] = 1.0;
-    J[2] = -y[1];       J[3] = -y[0];
-    dfdt[0] = dfdt[1] = 0; /* not used by the Gauss stepper */
-    return GSL_SUCCESS;
-}
 
 typedef struct {
     gsl_odeiv2_step *s;
@@ -264,51 +230,9 @@ Test(gauss4, newton_failure_returns_failure_bounded)
  * ros34pw2 at 1e-8 all make the 44: see docs/dynamics.md (the Gauss method
  * is A-stable, not L-stable, and step doubling does not see an undamped
  * stiff contact mode). */
-typedef struct {
-    double q[256];
-    int modes[256], nq, ns;
-    long nrhs, njac, nev, nsteps, kinds[8];
-} outcome;
-
 #ifndef FIG5_T_END
 #define FIG5_T_END 2.0
 #endif
-
-static void run_fig5(const char *integ, const char *rtol, double t_end, outcome *o)
-{
-    char path[1024];
-    const char *ov[3] = {integ, rtol, "simulation.h_max=0.05"};
-    cd_error e;
-    cd_scenario *sc;
-    cd_data *d;
-    const cd_model *m;
-    int i, s;
-    snprintf(path, sizeof path, "%s/scenarios/paper_fig5_envelope_grasp.toml", root());
-    sc = cd_scenario_load(path, ov, 3, &e);
-    cr_assert(sc, "%s", e.msg);
-    m = sc->model;
-    d = cd_data_create(m, sc->event_capacity, &e);
-    cr_assert(d, "%s", e.msg);
-    cr_assert_eq(cd_sim_advance(m, d, t_end, NULL, NULL, &e), CD_OK, "%s: %s", integ, e.msg);
-    memset(o, 0, sizeof *o);
-    for (s = 0; s < m->nsys; s++) {
-        int ya = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1;
-        int np = m->sys_base_type[s] == CD_BASE_FREE ? 7 + nj : nj;
-        for (i = 0; i < np && o->nq < 256; i++) o->q[o->nq++] = d->y[ya + i];
-    }
-    o->ns = m->nslot < 256 ? m->nslot : 256;
-    for (i = 0; i < o->ns; i++) o->modes[i] = d->slot_mode[i];
-    for (i = 0; i < (d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap); i++) {
-        const cd_event *ev = cd_data_event(d, i);
-        if (ev && ev->kind >= 0 && ev->kind < 8) o->kinds[ev->kind]++;
-    }
-    o->nrhs = d->stats.nrhs;
-    o->njac = d->stats.njac;
-    o->nev = d->stats.nevents;
-    o->nsteps = d->stats.nsteps;
-    cd_data_free(d);
-    cd_scenario_free(sc);
-}
 
 Test(gauss4, fig5_grasp_agrees_with_tight_rk8pd, .timeout = 900)
 {

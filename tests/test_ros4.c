@@ -5,49 +5,13 @@
  * linear problem, and the Fig. 5 grasp against a tight rk8pd run. The
  * model-free tests drive the GSL step type directly on a workspace without a
  * model (cd_rosw_init_plain) with the system's exact Jacobian and df/dt. */
-#include <criterion/criterion.h>
-#include <capdyn/capdyn.h>
-#include <capdyn/io.h>
+#include "stepper_util.h"
 #include "../src/sim/rosw.h"
 
 #include <gsl/gsl_errno.h>
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
-
-static const char *root(void)
-{
-    const char *r = getenv("CAPDYN_ROOT");
-    return r && *r ? r : ".";
-}
-
-/* A smooth non-autonomous nonlinear system with the known solution
- * u1 = 2 + sin t, u2 = exp(-t/2):
- *   y1' = -y1^2 + y2 + g1(t),  y2' = -y1 y2 + g2(t),
- *   g1 = cos t + u1^2 - u2,    g2 = -u2/2 + u1 u2. */
-static void exact(double t, double *u) { u[0] = 2.0 + sin(t); u[1] = exp(-0.5 * t); }
-
-static int smooth_f(double t, const double y[], double f[], void *p)
-{
-    double u[2];
-    (void)p;
-    exact(t, u);
-    f[0] = -y[0] * y[0] + y[1] + cos(t) + u[0] * u[0] - u[1];
-    f[1] = -y[0] * y[1] - 0.5 * u[1] + u[0] * u[1];
-    return GSL_SUCCESS;
-}
-
-static int smooth_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    double u[2];
-    (void)p;
-    exact(t, u);
-    J[0] = -2.0 * y[0]; J[1] = 1.0;
-    J[2] = -y[1];       J[3] = -y[0];
-    dfdt[0] = -sin(t) + 2.0 * u[0] * cos(t) + 0.5 * u[1];
-    dfdt[1] = 0.25 * u[1] + cos(t) * u[1] - 0.5 * u[0] * u[1];
-    return GSL_SUCCESS;
-}
 
 typedef struct {
     gsl_odeiv2_step *s;
@@ -217,47 +181,6 @@ Test(ros4, stiff_linear_problem_stable_at_large_steps)
  * final slot modes, and every generalized coordinate (the object's pose among
  * them) within 1e-6 (m, rad; measured 1.7e-10). Event location runs on rodas4's own
  * locator steps and the samples on the Hermite interpolant. */
-typedef struct {
-    double q[256];
-    int modes[256], nq, ns;
-    long nrhs, njac, nev, kinds[8];
-} outcome;
-
-static void run_fig5(const char *integ, const char *rtol, double t_end, outcome *o)
-{
-    char path[1024];
-    const char *ov[3] = {integ, rtol, "simulation.h_max=0.05"};
-    cd_error e;
-    cd_scenario *sc;
-    cd_data *d;
-    const cd_model *m;
-    int i, s;
-    snprintf(path, sizeof path, "%s/scenarios/paper_fig5_envelope_grasp.toml", root());
-    sc = cd_scenario_load(path, ov, 3, &e);
-    cr_assert(sc, "%s", e.msg);
-    m = sc->model;
-    d = cd_data_create(m, sc->event_capacity, &e);
-    cr_assert(d, "%s", e.msg);
-    cr_assert_eq(cd_sim_advance(m, d, t_end, NULL, NULL, &e), CD_OK, "%s: %s", integ, e.msg);
-    memset(o, 0, sizeof *o);
-    for (s = 0; s < m->nsys; s++) { /* the coordinates of every system (positions, quaternions, joints) */
-        int ya = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1;
-        int np = m->sys_base_type[s] == CD_BASE_FREE ? 7 + nj : nj;
-        for (i = 0; i < np && o->nq < 256; i++) o->q[o->nq++] = d->y[ya + i];
-    }
-    o->ns = m->nslot < 256 ? m->nslot : 256;
-    for (i = 0; i < o->ns; i++) o->modes[i] = d->slot_mode[i];
-    for (i = 0; i < (d->ev_count < d->ev_cap ? d->ev_count : d->ev_cap); i++) {
-        const cd_event *ev = cd_data_event(d, i);
-        if (ev && ev->kind >= 0 && ev->kind < 8) o->kinds[ev->kind]++;
-    }
-    o->nrhs = d->stats.nrhs;
-    o->njac = d->stats.njac;
-    o->nev = d->stats.nevents;
-    cd_data_free(d);
-    cd_scenario_free(sc);
-}
-
 Test(ros4, fig5_grasp_agrees_with_tight_rk8pd, .timeout = 600)
 {
     static outcome o[2];
