@@ -18,10 +18,10 @@
  * and in both cases every allocation of the run is freed (allocations still
  * live after it == before it). A crash, an abort, a leak or any other status
  * fails the test. Exit status 0 when all N pass; the summary on stdout.
- * The whole first part runs twice: with the scene's integrator and with
- * simulation.integrator = "rk4imp" (capdyn's Gauss stepper, src/sim/gauss4.c,
- * which replaced GSL's: that one allocated in every step and aborted when an
- * allocation failed).
+ * The whole first part runs three times: with the scene's integrator (auto:
+ * rk8pd and ros34pw2), with simulation.integrator = "rk4imp" (capdyn's Gauss
+ * stepper, src/sim/gauss4.c, which replaced GSL's: that one allocated in every
+ * step and aborted when an allocation failed) and with "rodas4".
  *
  * One exception, found by this test: Debian's toml++ 3.3 (libtomlplusplus.so)
  * calls std::terminate when an allocation fails inside its parser (the
@@ -215,6 +215,7 @@ void free(void *p)
 /* ---- the work ---- */
 static char g_scene[4096];
 static const char *g_integ; /* an integrator override ("simulation.integrator=..."), NULL: the scene's */
+static const char *g_label = ""; /* its name in the summary, "rk4imp: " */
 
 /* load + create + run; returns the status, msg filled on error */
 static cd_status work(char *msg, size_t len)
@@ -457,7 +458,7 @@ static long fail_each(void)
     printf("failalloc: %s%ld allocations in load + create + run; failing each: %ld CD_ENOMEM, %ld CD_EIO (out of memory "
            "opening a file), %ld still succeed (of which %ld inside toml++ and %ld inside GSL's control set-up, "
            "granted), %ld bad\n",
-           g_integ ? "rk4imp: " : "", total, enomem, eio, ok, g_in_toml, g_in_gsl, bad);
+           g_label, total, enomem, eio, ok, g_in_toml, g_in_gsl, bad);
     return bad;
 }
 
@@ -484,10 +485,15 @@ int main(void)
         return 1;
     }
     bad = fail_each();
-    /* rk4imp (capdyn's Gauss stepper): its workspace comes with the data,
-     * its steps allocate nothing */
+    /* capdyn's other implicit steppers: their workspaces come with the data,
+     * their steps allocate nothing */
     g_integ = "simulation.integrator=\"rk4imp\"";
+    g_label = "rk4imp: ";
+    bad += fail_each();
+    g_integ = "simulation.integrator=\"rodas4\"";
+    g_label = "rodas4: ";
     bad += fail_each();
     g_integ = NULL;
+    g_label = "";
     return test_writer() || bad ? 1 : 0;
 }
