@@ -46,4 +46,44 @@ static inline int add_plane(cd_model *m, int body)
     return sh;
 }
 
+/* A ball (mass, uniform-sphere inertia 0.4 m r^2, check point of radius r
+ * at its CoM) at height r + gap over a fixed ground plane, moving at -v0
+ * toward it, in contact through law; integrated at rtol 1e-12, atol 1e-14
+ * and h_max; the slot starts open. */
+typedef struct { cd_model *m; cd_data *d; int ball; } ball_scene;
+
+static inline ball_scene ball_on_plane(double mass, double r, double gap, double v0, const cd_contact_law *law,
+                                       double h_max)
+{
+    ball_scene sc;
+    cd_error e;
+    double pos[3] = {0, 0, 0}, vel[3] = {0, 0, 0}, zero[3] = {0, 0, 0};
+    int ground, plane, lid;
+    sc.m = cd_model_create();
+    cr_assert(sc.m);
+    ground = add_system(sc.m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    plane = add_plane(sc.m, sc.m->sys_body_adr[ground]);
+    pos[2] = r + gap;
+    vel[2] = -v0;
+    sc.ball = add_system(sc.m, "ball", CD_BASE_FREE, mass, 0.4 * mass * r * r, pos, vel, NULL);
+    cr_assert(cd_model_add_checkpoint(sc.m, sc.m->sys_body_adr[sc.ball], zero, r, &e) >= 0, "%s", e.msg);
+    lid = cd_model_add_law(sc.m, law, &e);
+    cr_assert(lid >= 0, "the model accepts the law: %s", e.msg);
+    cr_assert(cd_model_add_pair(sc.m, sc.ball, -1, plane, lid, &e) >= 0, "%s", e.msg);
+    cr_assert_eq(cd_model_finalize(sc.m, &e), CD_OK, "%s", e.msg);
+    sc.m->opt.rtol = 1e-12;
+    sc.m->opt.atol = 1e-14;
+    sc.m->opt.h_max = h_max;
+    sc.d = cd_data_create(sc.m, 0, &e);
+    cr_assert(sc.d, "%s", e.msg);
+    cr_assert_eq(sc.d->slot_mode[0], CD_MODE_OPEN);
+    return sc;
+}
+
+static inline void ball_scene_free(ball_scene *sc)
+{
+    cd_data_free(sc->d);
+    cd_model_free(sc->m);
+}
+
 #endif

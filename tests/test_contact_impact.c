@@ -48,40 +48,14 @@ static cd_contact_law normal_law(double K, double D, double p, double q)
 
 /* A ball (mass m, check point of radius r at its CoM) at height r + gap,
  * moving at -v0 toward the ground plane. */
-typedef struct { cd_model *m; cd_data *d; int ball; } scene;
+typedef ball_scene scene;
 
-static scene ball_scene(double mass, double r, double gap, double v0, const cd_contact_law *law)
+static scene ball_scene_of(double mass, double r, double gap, double v0, const cd_contact_law *law)
 {
-    scene sc;
-    cd_error e;
-    double pos[3] = {0, 0, 0}, vel[3] = {0, 0, 0}, zero[3] = {0, 0, 0};
-    int ground, plane, lid;
-    sc.m = cd_model_create();
-    cr_assert(sc.m);
-    ground = add_system(sc.m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
-    plane = add_plane(sc.m, sc.m->sys_body_adr[ground]);
-    pos[2] = r + gap;
-    vel[2] = -v0;
-    sc.ball = add_system(sc.m, "ball", CD_BASE_FREE, mass, 0.4 * mass * r * r, pos, vel, NULL);
-    cr_assert(cd_model_add_checkpoint(sc.m, sc.m->sys_body_adr[sc.ball], zero, r, &e) >= 0, "%s", e.msg);
-    lid = cd_model_add_law(sc.m, law, &e);
-    cr_assert(lid >= 0, "the model accepts mu_s = mu_k = 0: %s", e.msg);
-    cr_assert(cd_model_add_pair(sc.m, sc.ball, -1, plane, lid, &e) >= 0, "%s", e.msg);
-    cr_assert_eq(cd_model_finalize(sc.m, &e), CD_OK, "%s", e.msg);
-    sc.m->opt.rtol = 1e-12;
-    sc.m->opt.atol = 1e-14;
-    sc.m->opt.h_max = 1e-3; /* < 1/30 of every contact duration below */
-    sc.d = cd_data_create(sc.m, 0, &e);
-    cr_assert(sc.d, "%s", e.msg);
-    cr_assert_eq(sc.d->slot_mode[0], CD_MODE_OPEN);
-    return sc;
+    return ball_on_plane(mass, r, gap, v0, law, 1e-3 /* < 1/30 of every contact duration below */);
 }
 
-static void scene_free(scene *sc)
-{
-    cd_data_free(sc->d);
-    cd_model_free(sc->m);
-}
+static void scene_free(scene *sc) { ball_scene_free(sc); }
 
 /* Runs a single impact to t_end; returns onset and separation times and the
  * rebound velocity; asserts the event log holds exactly onset, separation. */
@@ -136,7 +110,7 @@ Test(contact_impact, linear_spring_dashpot_restitution_and_duration)
         double tc_exact = 2.0 * acos(zeta) / wd, e_exact = exp(-zeta * wn * tc_exact);
         double t_on, t_sep, v_out, tc, e, err_tc, err_e;
         cd_contact_law law = normal_law(K, D, 1.0, 1.0);
-        scene sc = ball_scene(mass, r, gap, v0, &law);
+        scene sc = ball_scene_of(mass, r, gap, v0, &law);
         run_impact(&sc, gap / v0 + 2.0 * tc_exact, &t_on, &t_sep, &v_out);
         tc = t_sep - t_on;
         e = v_out / v0;
@@ -161,7 +135,7 @@ Test(contact_impact, linear_impact_with_the_stiff_stepper)
     double D = 2.0 * zeta * sqrt(K * mass), wn = sqrt(K / mass), wd = wn * sqrt(1.0 - zeta * zeta);
     double tc_exact = 2.0 * acos(zeta) / wd, e_exact = exp(-zeta * wn * tc_exact), t_on, t_sep, v_out;
     cd_contact_law law = normal_law(K, D, 1.0, 1.0);
-    scene sc = ball_scene(mass, r, gap, v0, &law);
+    scene sc = ball_scene_of(mass, r, gap, v0, &law);
     cd_error e;
     cd_data_free(sc.d);
     sc.m->opt.stepper = CD_STEP_ROS34PW2;
@@ -223,7 +197,7 @@ Test(contact_impact, hertz_contact_duration_and_energy)
         double v0 = speeds[i], tc_exact = C * pow(mass * mass / (K * K * v0), 0.2);
         double t_on, t_sep, v_out, tc, err_tc, err_E;
         cd_contact_law law = normal_law(K, 0.0, 1.5, 1.0);
-        scene sc = ball_scene(mass, r, gap, v0, &law);
+        scene sc = ball_scene_of(mass, r, gap, v0, &law);
         run_impact(&sc, gap / v0 + 2.0 * tc_exact, &t_on, &t_sep, &v_out);
         tc = t_sep - t_on;
         err_tc = fabs(tc - tc_exact) / tc_exact;

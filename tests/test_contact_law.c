@@ -21,7 +21,7 @@
 #include <math.h>
 #include <string.h>
 
-typedef struct { cd_model *m; cd_data *d; int ball; } scene;
+typedef ball_scene scene;
 
 static cd_contact_law law_of(int damping, double K, double D, double p)
 {
@@ -39,35 +39,10 @@ static cd_contact_law law_of(int damping, double K, double D, double p)
 
 static scene ball(double mass, double r, double gap, double v0, const cd_contact_law *law)
 {
-    scene sc;
-    cd_error e;
-    double pos[3] = {0, 0, 0}, vel[3] = {0, 0, 0}, zero[3] = {0, 0, 0};
-    int ground, plane, lid;
-    sc.m = cd_model_create();
-    cr_assert(sc.m);
-    ground = add_system(sc.m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
-    plane = add_plane(sc.m, sc.m->sys_body_adr[ground]);
-    pos[2] = r + gap;
-    vel[2] = -v0;
-    sc.ball = add_system(sc.m, "ball", CD_BASE_FREE, mass, 0.4 * mass * r * r, pos, vel, NULL);
-    cr_assert(cd_model_add_checkpoint(sc.m, sc.m->sys_body_adr[sc.ball], zero, r, &e) >= 0, "%s", e.msg);
-    lid = cd_model_add_law(sc.m, law, &e);
-    cr_assert(lid >= 0, "%s", e.msg);
-    cr_assert(cd_model_add_pair(sc.m, sc.ball, -1, plane, lid, &e) >= 0, "%s", e.msg);
-    cr_assert_eq(cd_model_finalize(sc.m, &e), CD_OK, "%s", e.msg);
-    sc.m->opt.rtol = 1e-12;
-    sc.m->opt.atol = 1e-14;
-    sc.m->opt.h_max = 1e-4;
-    sc.d = cd_data_create(sc.m, 0, &e);
-    cr_assert(sc.d, "%s", e.msg);
-    return sc;
+    return ball_on_plane(mass, r, gap, v0, law, 1e-4);
 }
 
-static void scene_free(scene *sc)
-{
-    cd_data_free(sc->d);
-    cd_model_free(sc->m);
-}
+static void scene_free(scene *sc) { ball_scene_free(sc); }
 
 static void advance(scene *sc, double t)
 {
