@@ -100,13 +100,12 @@ static cd_model *scene(int stepper)
 Test(invariants, no_allocation_in_steps_and_events)
 {
 #if CD_COUNT_ALLOC
-    /* every stepper capdyn owns (rk4imp is capdyn's Gauss stepper, gauss4.c);
-     * msbdf is GSL's and allocates in gsl_linalg_LU_decomp (docs/embedding.md:
-     * not for flight loops) */
-    int steppers[8] = {CD_STEP_RKF45,    CD_STEP_RKCK, CD_STEP_RK8PD,  CD_STEP_RK4_FIXED,
-                       CD_STEP_ROS34PW2, CD_STEP_AUTO, CD_STEP_RODAS4, CD_STEP_RK4IMP},
+    /* every stepper (rk4imp is capdyn's Gauss stepper, gauss4.c; msbdf its
+     * BDF stepper, bdf.c) */
+    int steppers[9] = {CD_STEP_RKF45,    CD_STEP_RKCK, CD_STEP_RK8PD,  CD_STEP_RK4_FIXED, CD_STEP_ROS34PW2,
+                       CD_STEP_AUTO,     CD_STEP_RODAS4, CD_STEP_RK4IMP, CD_STEP_MSBDF},
         i;
-    for (i = 0; i < 8; i++) {
+    for (i = 0; i < 9; i++) {
         cd_model *m = scene(steppers[i]);
         cd_error e;
         cd_data *d = cd_data_create(m, 0, &e);

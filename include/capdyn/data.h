@@ -7,9 +7,8 @@
  * finalized model and keeps no pointer to it: pass the model to every call.
  * All of its memory is one block taken at cd_data_create (from the caller's
  * allocator if one is given), except GSL's own stepper objects, which GSL
- * allocates itself. After creation nothing allocates except: the implicit
- * stepper msbdf (inside GSL), cd_state_copy (one temporary
- * buffer) and cd_data_reset with opt.equilibrium_start (the settle's work
+ * allocates itself. After creation nothing allocates except cd_state_copy
+ * (one temporary buffer) and cd_data_reset with opt.equilibrium_start (the settle's work
  * space), both through the data's allocator. This header sits below dynamics, contact and the
  * integrator: it knows the layout, not the physics. */
 #ifndef CAPDYN_DATA_H
@@ -270,8 +269,9 @@ const cd_event *cd_data_event(const cd_data *d, long i);
  * counters, the schedule rows, the inputs, the integrator's next step size
  * and the fixed-rate step counter of cd_step. Packed as doubles (integers are
  * exact). Restoring it and continuing is bit-identical to not having
- * stopped, for every stepper. msbdf keeps a history inside GSL that cannot
- * be copied, and rk4imp a Jacobian and starting values (like ros34pw2): for
+ * stopped, for every stepper. msbdf keeps a history of accepted points, and
+ * rk4imp a Jacobian and starting values (like ros34pw2), that are not
+ * copied: for
  * them cd_state_get makes the save point a
  * restart point of the stepper, in the run that goes on as in any run
  * restored from the snapshot (both restart there, so both agree bit for bit). */

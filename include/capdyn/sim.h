@@ -1,8 +1,8 @@
 /* capdyn: simulation data (cd_data), kinematics, dynamics, contact and the
  * event-driven integrator. Everything here works on a finalized cd_model and
- * a cd_data created from it; no call allocates after cd_data_create() except
- * GSL's implicit stepper msbdf, which allocates inside GSL (rk4imp is
- * capdyn's own since it replaced GSL's and allocates nothing). */
+ * a cd_data created from it; no step allocates after cd_data_create(), with
+ * any stepper (the implicit rk4imp and msbdf are capdyn's own since they
+ * replaced GSL's, which allocated inside their LU). */
 #ifndef CAPDYN_SIM_H
 #define CAPDYN_SIM_H
 

@@ -2,7 +2,7 @@
  *
  * GSL odeiv2 is driven one accepted step at a time (gsl_odeiv2_evolve_apply)
  * with the step, control and evolve objects of a gsl_odeiv2_driver allocated
- * once at cd_data_create (the driver object is needed by msbdf). After every
+ * once at cd_data_create (the driver holds them). After every
  * accepted step the switching functions of every switch unit (src/sim/switch.h:
  * contact slots, joint stops, joint friction, user switches) are evaluated; if
  * any changed sign, the crossing is located by Illinois (modified regula
@@ -38,6 +38,7 @@
 #include "../mechanism/actuation.h"
 #include "../kinematics/prescribed.h"
 #include "integ.h"
+#include "bdf.h"
 #include "gauss4.h"
 #include "rosw.h"
 #include "switch.h"
@@ -114,6 +115,7 @@ typedef struct {
     cd_stepper stepper;       /* the one the GSL objects were made for */
     cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
     cd_gauss4 g4;             /* rk4imp: its stage and iteration-matrix buffers (its Jacobian: rw) */
+    cd_bdf bdf;               /* msbdf: its history and iteration-matrix buffers (its Jacobian: rw) */
     /* auto: drv->s and loc are rk8pd; the stiff pair below is ros34pw2 */
     gsl_odeiv2_step *s_stiff, *loc_stiff;
     int autom;                /* stepper is CD_STEP_AUTO */
@@ -144,7 +146,8 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
-/* Finite-difference Jacobian for GSL's implicit stepper msbdf. */
+/* Finite-difference Jacobian and df/dt of the system (GSL's sys.jacobian;
+ * capdyn's own implicit steppers use rosw.c's instead). */
 static int jac(double t, const double y[], double *dfdy, double dfdt[], void *params)
 {
     cd_integ *I = (cd_integ *)params;
@@ -189,10 +192,12 @@ size_t cd_integ_size(const cd_model *m)
     /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2
      * buffers (also rk4imp's Jacobian), then rk4imp's own */
     return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RK4IMP
+           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RK4IMP ||
+                    m->opt.stepper == CD_STEP_MSBDF
                 ? cd_rosw_size(m)
                 : 0) +
-           (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0);
+           (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
+           (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
@@ -226,7 +231,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
     case CD_STEP_RK8PD: T = gsl_odeiv2_step_rk8pd; break;
     case CD_STEP_RK4IMP: T = cd_step_gauss4; break; /* capdyn's own (gauss4.c): GSL's allocates in every step */
-    case CD_STEP_MSBDF: T = gsl_odeiv2_step_msbdf; break;
+    case CD_STEP_MSBDF: T = cd_step_bdf; break; /* capdyn's own (bdf.c): GSL's allocates in its LU */
     case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
     case CD_STEP_RODAS4: T = cd_step_rodas4; break;
     case CD_STEP_AUTO: T = gsl_odeiv2_step_rk8pd; break;
@@ -250,6 +255,11 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_rosw_init(&I->rw, m, d, p + 1);
             cd_gauss4_init(&I->g4, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_gauss4_bind(I->drv->s, &I->g4);
+        }
+        if (d->opt.stepper == CD_STEP_MSBDF) {
+            cd_rosw_init(&I->rw, m, d, p + 1);
+            cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
+            cd_bdf_bind(I->drv->s, &I->bdf);
         }
         if (I->autom) {
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);

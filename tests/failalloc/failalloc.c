@@ -18,10 +18,12 @@
  * and in both cases every allocation of the run is freed (allocations still
  * live after it == before it). A crash, an abort, a leak or any other status
  * fails the test. Exit status 0 when all N pass; the summary on stdout.
- * The whole first part runs three times: with the scene's integrator (auto:
+ * The whole first part runs four times: with the scene's integrator (auto:
  * rk8pd and ros34pw2), with simulation.integrator = "rk4imp" (capdyn's Gauss
  * stepper, src/sim/gauss4.c, which replaced GSL's: that one allocated in every
- * step and aborted when an allocation failed) and with "rodas4".
+ * step and aborted when an allocation failed), with "rodas4" and with
+ * "msbdf" (capdyn's BDF stepper, src/sim/bdf.c, which replaced GSL's, whose
+ * LU allocated inside steps).
  *
  * One exception, found by this test: Debian's toml++ 3.3 (libtomlplusplus.so)
  * calls std::terminate when an allocation fails inside its parser (the
@@ -492,6 +494,9 @@ int main(void)
     bad += fail_each();
     g_integ = "simulation.integrator=\"rodas4\"";
     g_label = "rodas4: ";
+    bad += fail_each();
+    g_integ = "simulation.integrator=\"msbdf\"";
+    g_label = "msbdf: ";
     bad += fail_each();
     g_integ = NULL;
     g_label = "";
