@@ -1,6 +1,6 @@
 /* Shared by the stepper suites (test_ros4.c, test_gauss4.c): a smooth
  * non-autonomous nonlinear system with a known solution for measuring a
- * stepper's order, and the Fig. 5 grasp run to compare a stepper with a tight
+ * stepper's order, a very stiff linear one, and the Fig. 5 grasp run to compare a stepper with a tight
  * rk8pd reference. */
 #ifndef CAPDYN_TESTS_STEPPER_UTIL_H
 #define CAPDYN_TESTS_STEPPER_UTIL_H
@@ -47,6 +47,42 @@ static inline int smooth_j(double t, const double y[], double *J, double dfdt[],
     J[2] = -y[1];       J[3] = -y[0];
     dfdt[0] = -sin(t) + 2.0 * u[0] * cos(t) + 0.5 * u[1];
     dfdt[1] = 0.25 * u[1] + cos(t) * u[1] - 0.5 * u[0] * u[1];
+    return GSL_SUCCESS;
+}
+
+/* The Prothero-Robinson-like stiff linear problem y' = -1e6 (y - cos t), its
+ * exact Jacobian and df/dt, the smooth solution through it (stiff_exact: the
+ * one every start relaxes to within ~1e-6 s), and a zero "Jacobian" that
+ * makes a Newton iteration a fixed-point one (to force its failure). */
+static inline int stiff_f(double t, const double y[], double f[], void *p)
+{
+    (void)p;
+    f[0] = -1e6 * (y[0] - cos(t));
+    return GSL_SUCCESS;
+}
+
+static inline int stiff_j(double t, const double y[], double *J, double dfdt[], void *p)
+{
+    (void)p;
+    (void)y;
+    J[0] = -1e6;
+    dfdt[0] = -1e6 * sin(t);
+    return GSL_SUCCESS;
+}
+
+static inline double stiff_exact(double t)
+{
+    const double l = 1e6;
+    return (l * l * cos(t) + l * sin(t)) / (1.0 + l * l);
+}
+
+static inline int zero_j(double t, const double y[], double *J, double dfdt[], void *p)
+{
+    (void)t;
+    (void)y;
+    (void)p;
+    J[0] = 0;
+    dfdt[0] = 0;
     return GSL_SUCCESS;
 }
 

@@ -154,27 +154,6 @@ Test(bdf, variable_order_error_falls_with_tolerance)
  * mode) the offset is damped (R(-inf) = 0 for every BDF: it is gone once
  * y(0) has left the k points of the history, so the worst error is taken
  * from step k + 2 on). */
-static int stiff_f(double t, const double y[], double f[], void *p)
-{
-    (void)p;
-    f[0] = -1e6 * (y[0] - cos(t));
-    return GSL_SUCCESS;
-}
-static int stiff_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    (void)p;
-    (void)y;
-    J[0] = -1e6;
-    dfdt[0] = -1e6 * sin(t);
-    return GSL_SUCCESS;
-}
-
-static double stiff_exact(double t)
-{
-    const double l = 1e6;
-    return (l * l * cos(t) + l * sin(t)) / (1.0 + l * l);
-}
-
 Test(bdf, stiff_linear_problem_stable_at_large_steps)
 {
     gsl_odeiv2_system sys = {stiff_f, stiff_j, 1, NULL};
@@ -209,16 +188,6 @@ Test(bdf, stiff_linear_problem_stable_at_large_steps)
  * step returns GSL_FAILURE (GSL's evolve then halves the step) after at most
  * CD_BDF_NEWTON_MAX iterations, and y is unchanged; at h = 1e-8 it
  * converges. */
-static int zero_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    (void)t;
-    (void)y;
-    (void)p;
-    J[0] = 0;
-    dfdt[0] = 0;
-    return GSL_SUCCESS;
-}
-
 Test(bdf, newton_failure_returns_failure_bounded)
 {
     gsl_odeiv2_system sys = {stiff_f, zero_j, 1, NULL};

@@ -133,27 +133,6 @@ Test(gauss4, step_doubling_estimate_tracks_the_local_error)
  * y(0) = 2 (an offset of ~1 on the stiff mode) the offset stays bounded by
  * its start but is not damped: Gauss is A-stable, not L-stable
  * (|R(-inf)| = 1; measured 0.99 at t = 2 for h = 0.1). */
-static int stiff_f(double t, const double y[], double f[], void *p)
-{
-    (void)p;
-    f[0] = -1e6 * (y[0] - cos(t));
-    return GSL_SUCCESS;
-}
-static int stiff_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    (void)p;
-    (void)y;
-    J[0] = -1e6;
-    dfdt[0] = -1e6 * sin(t);
-    return GSL_SUCCESS;
-}
-
-static double stiff_exact(double t)
-{
-    const double l = 1e6;
-    return (l * l * cos(t) + l * sin(t)) / (1.0 + l * l);
-}
-
 Test(gauss4, stiff_linear_problem_bounded_at_large_steps)
 {
     gsl_odeiv2_system sys = {stiff_f, stiff_j, 1, NULL};
@@ -191,16 +170,6 @@ Test(gauss4, stiff_linear_problem_bounded_at_large_steps)
  * "Jacobian" (a fixed-point iteration, contraction |h a lambda| >> 1). The
  * step returns GSL_FAILURE (GSL's evolve then halves the step) after at most
  * CD_GAUSS4_NEWTON_MAX iterations, and y is unchanged. */
-static int zero_j(double t, const double y[], double *J, double dfdt[], void *p)
-{
-    (void)t;
-    (void)y;
-    (void)p;
-    J[0] = 0;
-    dfdt[0] = 0;
-    return GSL_SUCCESS;
-}
-
 Test(gauss4, newton_failure_returns_failure_bounded)
 {
     gsl_odeiv2_system sys = {stiff_f, zero_j, 1, NULL};

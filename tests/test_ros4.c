@@ -135,13 +135,13 @@ Test(ros4, embedded_estimate_is_of_order_3)
  * 2.0e-9), and a start off the smooth solution (y(0) = 2) is damped in one
  * step (L-stability, R(-infinity) = 0: measured 8.8e-5 of the offset of 1
  * after the first step) and keeps decaying (the end error below 1e-8). */
-static int stiff_f(double t, const double y[], double f[], void *p)
+static int stiff_cos_f(double t, const double y[], double f[], void *p)
 {
     (void)p;
     f[0] = -1e6 * (y[0] - cos(t)) - sin(t);
     return GSL_SUCCESS;
 }
-static int stiff_j(double t, const double y[], double *J, double dfdt[], void *p)
+static int stiff_cos_j(double t, const double y[], double *J, double dfdt[], void *p)
 {
     (void)p;
     (void)y;
@@ -152,7 +152,7 @@ static int stiff_j(double t, const double y[], double *J, double dfdt[], void *p
 
 Test(ros4, stiff_linear_problem_stable_at_large_steps)
 {
-    gsl_odeiv2_system sys = {stiff_f, stiff_j, 1, NULL};
+    gsl_odeiv2_system sys = {stiff_cos_f, stiff_cos_j, 1, NULL};
     int start;
     for (start = 0; start < 2; start++) {
         plain P;
