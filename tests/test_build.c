@@ -579,9 +579,9 @@ static cd_model *spinning_box(double w, cd_stepper st, int principal)
  * 1 to 3 times them for a spin about a principal axis (steadier: larger steps) */
 Test(build, spin_step_estimate_is_within_a_factor_of_two)
 {
-    const cd_stepper st[3] = {CD_STEP_RK8PD, CD_STEP_RKF45, CD_STEP_RKCK};
+    const cd_stepper st[5] = {CD_STEP_RK8PD, CD_STEP_RKF45, CD_STEP_RKCK, CD_STEP_RK4IMP, CD_STEP_MSBDF};
     int i;
-    for (i = 0; i < 3; i++) {
+    for (i = 0; i < 5; i++) {
         cd_model *m = spinning_box(1000.0, st[i], 0), *p = spinning_box(1000.0, st[i], 1);
         cd_error err;
         cd_data *d = cd_data_create(m, 0, &err), *dp = cd_data_create(p, 0, &err);

@@ -85,9 +85,9 @@ int cd_build_target(cd_model *m, const cd_target_desc *t, cd_error *err);
  * of `duration` s takes about c(stepper, rtol) |w| duration steps whatever
  * h_max allows: 1e6 rad/s for 1 s is millions of steps. c is the measured
  * steps per radian of a torque-free tumbling box (docs/embedding.md,
- * "Tumbling rate"): rk8pd 2.6, rkck 15, rkf45 22, rk4imp 19, msbdf 29,
+ * "Tumbling rate"): rk8pd 2.6, rkck 15, rkf45 22, rk4imp 14.5, msbdf 119,
  * ros34pw2 635 at rtol = 1e-9, scaled by (1e-9 / rtol)^(1/k) with k = 8
- * (rk8pd), 3 (ros34pw2), 5 (the others): a rough figure for a warning
+ * (rk8pd), 3 (ros34pw2), 6 (msbdf), 5 (the others): a rough figure for a warning
  * (within a factor of 2 of the steps taken on that tumbling box; a spin
  * about a principal axis takes up to 3 times fewer: tests/test_build.c). Returns the free system with the largest
  * initial |angular velocity| (its rate in *rate [rad/s], the steps in
