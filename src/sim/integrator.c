@@ -89,7 +89,7 @@ typedef struct {
     gsl_odeiv2_system sys;
     gsl_odeiv2_driver *drv;   /* adaptive steppers (NULL in fixed mode) */
     gsl_odeiv2_step *loc;     /* rk8pd one-step locator (adaptive modes; NULL in fixed mode) */
-    double *y0, *ylo, *yhi, *yerr, *fd_f0, *fd_y;
+    double *y0, *ylo, *yhi, *yerr;
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
     double *f0s, *f1s;        /* f at the start and the end of the step an event is located in (the Hermite cubic) */
     double *f0chk;            /* f(t0, y0) of the step being taken (the divergence check) */
@@ -111,7 +111,7 @@ typedef struct {
     int have_end;             /* t_end, y_end and in_snap describe the end of a call */
     int fsal;                 /* d->ydot is f(t, y) with the current modes and inputs */
     int restart_pending;      /* the next call restarts the stepper (msbdf/rk4imp snapshot) */
-    int fixed, history;       /* fixed-step mode; the stepper keeps a history (msbdf, rk4imp) */
+    int fixed, history;       /* fixed-step mode; the stepper keeps state beyond (t, y) (uses_rosw) */
     cd_stepper stepper;       /* the one the GSL objects were made for */
     cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
     cd_gauss4 g4;             /* rk4imp: its stage and iteration-matrix buffers (its Jacobian: rw) */
@@ -146,30 +146,6 @@ static int rhs(double t, const double y[], double dydt[], void *params)
     return GSL_SUCCESS;
 }
 
-/* Finite-difference Jacobian and df/dt of the system (GSL's sys.jacobian;
- * capdyn's own implicit steppers use rosw.c's instead). */
-static int jac(double t, const double y[], double *dfdy, double dfdt[], void *params)
-{
-    cd_integ *I = (cd_integ *)params;
-    int n = I->m->ny, i, j;
-    double eps = I->d->opt.fd_eps;
-    if (rhs(t, y, I->fd_f0, params) != GSL_SUCCESS) return GSL_EBADFUNC;
-    memcpy(I->fd_y, y, (size_t)n * sizeof(double));
-    for (j = 0; j < n; j++) {
-        double h = eps * (fabs(y[j]) > 1.0 ? fabs(y[j]) : 1.0);
-        I->fd_y[j] = y[j] + h;
-        if (rhs(t, I->fd_y, I->yerr, params) != GSL_SUCCESS) return GSL_EBADFUNC;
-        for (i = 0; i < n; i++) dfdy[i * n + j] = (I->yerr[i] - I->fd_f0[i]) / h;
-        I->fd_y[j] = y[j];
-    }
-    {
-        double h = eps * (fabs(t) > 1.0 ? fabs(t) : 1.0);
-        if (rhs(t + h, y, I->yerr, params) != GSL_SUCCESS) return GSL_EBADFUNC;
-        for (i = 0; i < n; i++) dfdt[i] = (I->yerr[i] - I->fd_f0[i]) / h;
-    }
-    return GSL_SUCCESS;
-}
-
 void cd_integ_free(void *p)
 {
     cd_integ *I = (cd_integ *)p;
@@ -185,17 +161,22 @@ void cd_integ_free(void *p)
 
 /* the linearly implicit steppers of rosw.c (their workspace: cd_rosw) */
 static int rosenbrock(cd_stepper s) { return s == CD_STEP_ROS34PW2 || s == CD_STEP_RODAS4; }
+/* the steppers on the rosw workspace (a Jacobian, LU and stage buffers): the
+ * Rosenbrock ones, auto's stiff one, and capdyn's Gauss (rk4imp) and BDF
+ * (msbdf), which take their Jacobian from it. They are also the steppers
+ * whose next step depends on more than (t, y) (I->history). */
+static int uses_rosw(cd_stepper s)
+{
+    return rosenbrock(s) || s == CD_STEP_AUTO || s == CD_STEP_RK4IMP || s == CD_STEP_MSBDF;
+}
 
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
-    /* the struct, then 16 n + nin doubles (16 buffers of n), then the ros34pw2
-     * buffers (also rk4imp's Jacobian), then rk4imp's own */
-    return sizeof(cd_integ) + 16 + (16 * n + nin + 1) * sizeof(double) +
-           (rosenbrock(m->opt.stepper) || m->opt.stepper == CD_STEP_AUTO || m->opt.stepper == CD_STEP_RK4IMP ||
-                    m->opt.stepper == CD_STEP_MSBDF
-                ? cd_rosw_size(m)
-                : 0) +
+    /* the struct, then 14 n + nin doubles (14 buffers of n), then the ros34pw2
+     * buffers (also the Jacobian of rk4imp and msbdf), then rk4imp's or msbdf's own */
+    return sizeof(cd_integ) + 16 + (14 * n + nin + 1) * sizeof(double) +
+           (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
            (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
            (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
 }
@@ -209,7 +190,7 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     memset(I, 0, cd_integ_size(m));
     p = (double *)(void *)(((uintptr_t)(I + 1) + 15) & ~(uintptr_t)15);
     I->y0 = p; p += n; I->ylo = p; p += n; I->yhi = p; p += n; I->yerr = p; p += n;
-    I->fd_f0 = p; p += n; I->fd_y = p; p += n; I->k1 = p; p += n; I->k2 = p; p += n;
+    I->k1 = p; p += n; I->k2 = p; p += n;
     I->k3 = p; p += n; I->k4 = p; p += n; I->ytmp = p; p += n; I->y_end = p; p += n;
     I->f0s = p; p += n; I->f1s = p; p += n; I->ylast = p; p += n; I->f0chk = p; p += n;
     I->in_snap = p;
@@ -217,14 +198,13 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->nin = (int)nin;
     I->d = d;
     I->sys.function = rhs;
-    I->sys.jacobian = jac;
+    I->sys.jacobian = NULL; /* every implicit stepper forms its own (rosw.c) */
     I->sys.dimension = n;
     I->sys.params = I;
     I->stepper = d->opt.stepper;
     I->fixed = d->opt.stepper == CD_STEP_RK4_FIXED;
     /* steppers whose next step depends on more than (t, y): a snapshot is a restart point */
-    I->history = d->opt.stepper == CD_STEP_MSBDF || d->opt.stepper == CD_STEP_RK4IMP || rosenbrock(d->opt.stepper) ||
-                 d->opt.stepper == CD_STEP_AUTO;
+    I->history = uses_rosw(d->opt.stepper);
     I->autom = d->opt.stepper == CD_STEP_AUTO;
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
@@ -246,18 +226,16 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
          * step as long as a stiff step would be unstable) */
         I->loc = gsl_odeiv2_step_alloc(rosenbrock(d->opt.stepper) ? T : gsl_odeiv2_step_rk8pd, n);
         if (!I->loc) goto nomem;
+        if (uses_rosw(d->opt.stepper)) cd_rosw_init(&I->rw, m, d, p + 1);
         if (rosenbrock(d->opt.stepper)) {
-            cd_rosw_init(&I->rw, m, d, p + 1);
             cd_rosw_bind(I->drv->s, &I->rw, 0);
             cd_rosw_bind(I->loc, &I->rw, 1);
         }
         if (d->opt.stepper == CD_STEP_RK4IMP) {
-            cd_rosw_init(&I->rw, m, d, p + 1);
             cd_gauss4_init(&I->g4, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_gauss4_bind(I->drv->s, &I->g4);
         }
         if (d->opt.stepper == CD_STEP_MSBDF) {
-            cd_rosw_init(&I->rw, m, d, p + 1);
             cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_bdf_bind(I->drv->s, &I->bdf);
         }
@@ -265,7 +243,6 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
             I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
             if (!I->s_stiff || !I->loc_stiff) goto nomem;
-            cd_rosw_init(&I->rw, m, d, p + 1);
             cd_rosw_bind(I->s_stiff, &I->rw, 0);
             cd_rosw_bind(I->loc_stiff, &I->rw, 1);
         }
