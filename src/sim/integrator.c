@@ -40,6 +40,7 @@
 #include "integ.h"
 #include "bdf.h"
 #include "gauss4.h"
+#include "rk8.h"
 #include "rosw.h"
 #include "switch.h"
 
@@ -209,12 +210,12 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     switch (d->opt.stepper) {
     case CD_STEP_RKF45: T = gsl_odeiv2_step_rkf45; break;
     case CD_STEP_RKCK: T = gsl_odeiv2_step_rkck; break;
-    case CD_STEP_RK8PD: T = gsl_odeiv2_step_rk8pd; break;
+    case CD_STEP_RK8PD: T = cd_step_rk8pd; break; /* capdyn's own (rk8.c): skips the open slots' anchors */
     case CD_STEP_RK4IMP: T = cd_step_gauss4; break; /* capdyn's own (gauss4.c): GSL's allocates in every step */
     case CD_STEP_MSBDF: T = cd_step_bdf; break; /* capdyn's own (bdf.c): GSL's allocates in its LU */
     case CD_STEP_ROS34PW2: T = cd_step_ros34pw2; break;
     case CD_STEP_RODAS4: T = cd_step_rodas4; break;
-    case CD_STEP_AUTO: T = gsl_odeiv2_step_rk8pd; break;
+    case CD_STEP_AUTO: T = cd_step_rk8pd; break;
     default: T = NULL; break;
     }
     if (!I->fixed) {
@@ -224,8 +225,10 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
         I->atol_set = d->opt.atol;
         /* the locator: rk8pd, or the stiff stepper itself (an explicit trial
          * step as long as a stiff step would be unstable) */
-        I->loc = gsl_odeiv2_step_alloc(rosenbrock(d->opt.stepper) ? T : gsl_odeiv2_step_rk8pd, n);
+        I->loc = gsl_odeiv2_step_alloc(rosenbrock(d->opt.stepper) ? T : cd_step_rk8pd, n);
         if (!I->loc) goto nomem;
+        if (T == cd_step_rk8pd) cd_rk8_bind(I->drv->s, m, d);
+        if (!rosenbrock(d->opt.stepper)) cd_rk8_bind(I->loc, m, d);
         if (uses_rosw(d->opt.stepper)) cd_rosw_init(&I->rw, m, d, p + 1);
         if (rosenbrock(d->opt.stepper)) {
             cd_rosw_bind(I->drv->s, &I->rw, 0);
@@ -469,9 +472,7 @@ static int one_step(cd_integ *I, double t, double h, double *y)
 {
     gsl_odeiv2_step *loc = I->stiff ? I->loc_stiff : I->loc;
     if (I->fixed) return rk4_step(I, t, h, y, 0);
-    /* a Rosenbrock locator starts afresh; GSL's rk8pd keeps nothing between
-     * steps (called without dydt_in, it writes every scratch array before it
-     * reads it), and its reset, which zeroes 13 stage vectors, is skipped */
+    /* a Rosenbrock locator starts afresh; rk8pd keeps nothing between steps */
     if (I->stiff || rosenbrock(I->stepper)) gsl_odeiv2_step_reset(loc);
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
