@@ -4,7 +4,10 @@
  * on demand. It must never skip a slot the exact query finds touching, and
  * it must change no result: the derivative, every slot output and every
  * switching function are bit-identical to the full evaluation
- * (opt.broad_phase = 0), and so is a whole capture run. */
+ * (opt.broad_phase = 0), and so is a whole capture run. The integrator's
+ * smallest switching function leaves out the open slots apart by more than
+ * their check point's radius (cd_contact_switch_near): the same ones with
+ * and without the broad phase, all with positive functions. */
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
@@ -117,7 +120,7 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
      * the derivative, every slot output (through cd_contact_slot_outputs)
      * and both switching functions are bit-identical. Then, with a third of
      * the slots closed (stick or slip), none of those is skipped either. */
-    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0;
+    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0, nleft = 0;
     cd_model *m = scene(&probe);
     cd_error e;
     cd_data *d1 = cd_data_create(m, 0, &e), *d0;
@@ -183,6 +186,28 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
             cd_contact_switch(m, d1, k, 0, g1);
             cd_contact_switch(m, d0, k, 0, g0);
             cr_assert(same(g0[0], g1[0]) && same(g0[1], g1[1]), "pose %d slot %d: switching functions", pose, k);
+            {
+                /* the integrator's minimum leaves out exactly the open slots apart by more than r
+                 * (their functions positive), the same with and without the broad phase, and
+                 * takes the others' functions as they are */
+                double h0[2], h1[2];
+                int n1 = cd_contact_switch_near(m, d1, k, h1), n0 = cd_contact_switch_near(m, d0, k, h0);
+                /* the rule on the full evaluation's x (a hull's plane bound beyond the margin: >= the
+                 * true x), and, independent of it, never for a slot within r by the exact query */
+                int apart = d0->slot_mode[k] == CD_MODE_OPEN && d0->slot_x[k] < -m->cp_radius[cp];
+                cr_assert_eq(n1, n0, "pose %d slot %d: left out with the broad phase %d, without %d (x %.17g / %.17g, exact %.17g, r %g, far %d, shape %d)", pose, k, !n1, !n0, d1->slot_x[k], d0->slot_x[k], xt, m->cp_radius[cp], d1->slot_far[k], (int)m->shape_type[sh]);
+                cr_assert_eq(n1, !apart, "pose %d slot %d: open %d, x = %.6g m, r = %g m: left out %d", pose, k,
+                             d0->slot_mode[k] == CD_MODE_OPEN, d0->slot_x[k], m->cp_radius[cp], !n1);
+                if (!(d1->slot_mode[k] == CD_MODE_OPEN && xt < -m->cp_radius[cp] * (1.0 - 1e-9)))
+                    cr_assert_eq(n1, 1, "pose %d slot %d: x = %.6g m by the exact query, left out", pose, k, xt);
+                if (!n1) {
+                    nleft++;
+                    cr_assert(g1[0] > 0 && g1[1] > 0, "pose %d slot %d: left out with g = (%g, %g)", pose, k, g1[0], g1[1]);
+                } else {
+                    cr_assert(same(h1[0], g1[0]) && same(h1[1], g1[1]) && same(h0[0], g0[0]) && same(h0[1], g0[1]),
+                              "pose %d slot %d: kept, with other functions", pose, k);
+                }
+            }
         }
         if (pose % 100 == 0) { /* cd_contact_complete leaves every array as the full evaluation's */
             cd_contact_complete(m, d1);
@@ -200,6 +225,8 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
     cr_expect_gt(ntouch, 1000, "the poses bring many check points into contact");
     cr_expect_gt(nskip, 50000, "most open slots are skipped");
     cr_expect_gt(nfar_bound, 1000, "many before their own exact query");
+    cr_log_info("%d open slots left out of the smallest switching function (apart by more than r)", nleft);
+    cr_expect_gt(nleft, 10000, "most open slots are apart by more than r");
     cd_data_free(d0);
     cd_data_free(d1);
     cd_model_free(m);

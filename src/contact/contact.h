@@ -45,6 +45,12 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot);
 /* Switching functions of slot k (g[0] normal, g[1] friction; negative =
  * leave the mode); see contact.c. */
 void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, double g[2]);
+/* The same functions for the smallest of all switching functions (the
+ * integrator's gmin): returns 0, g unset, for an open slot whose check point
+ * is apart from its shape by more than its own radius (x < -r: both
+ * functions positive, it cannot switch), else 1 with g as cd_contact_switch
+ * gives it. Decided on the exact x, with or without the broad phase. */
+int cd_contact_switch_near(const cd_model *m, const cd_data *d, int k, double g[2]);
 /* Applies the transition slot k's functions call for at the current state
  * (after an evaluation); fills ev's kind, owner, modes and forces. Returns 1
  * if the mode changed (or the slip direction was re-anchored). */

@@ -35,6 +35,7 @@
  * coordinates are set to their exact profile at the same places. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "../contact/contact.h"
 #include "../mechanism/actuation.h"
 #include "../kinematics/prescribed.h"
 #include "integ.h"
@@ -343,7 +344,11 @@ static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *whic
     for (u = 0; u < m->nsw; u++) {
         if (use_dwell && in_dwell(d, u)) continue;
         if (cd_sw_skip(m, d, u)) continue;
-        cd_sw_functions(m, d, u, 0, g);
+        if (u < m->nslot) {
+            if (!cd_contact_switch_near(m, d, u, g)) continue; /* an open slot far apart: positive */
+        } else {
+            cd_sw_functions(m, d, u, 0, g);
+        }
         if (g[0] < best) { best = g[0]; if (which) *which = u; }
         if (g[1] < best) { best = g[1]; if (which) *which = u; }
     }
