@@ -38,6 +38,7 @@
  * t = 0), the small-angle rotation vector that turns the base back. */
 #include "capdyn/control.h"
 #include "../math/cd_math.h"
+#include "../dynamics/jacobian.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -389,7 +390,10 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     } else {
         double V[6], M[36], y[6], qd_ref[MAXJ], big = 0;
         approach_twist(c, d, V);
-        if (cd_generalized_jacobian(m, d, k->palm, k->palm_pos, c->Jg, NULL) != CD_OK) {
+        int cols[MAXJ];
+        for (i = 0; i < c->na; i++) cols[i] = c->arm[i] - b0 - 1;
+        /* the arm's columns only: the rest of J_g is not read */
+        if (cd_generalized_jacobian_cols(m, d, k->palm, k->palm_pos, c->Jg, cols, c->na) != CD_OK) {
             for (i = 0; i < c->na; i++) tau[i] = 0.0;
         } else {
             /* damped least squares over the arm's columns of J_g */

@@ -5,6 +5,7 @@
  * per column, no matrix products. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "jacobian.h"
 
 #include <string.h>
 
@@ -47,20 +48,20 @@ void cd_point_jacobian(const cd_model *m, const cd_data *d, int body, const doub
     }
 }
 
-cd_status cd_generalized_jacobian(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
-                                  cd_error *err)
+/* J_g's columns cols[0..ncols) (joint indices 0..nj-1; all when cols is
+ * NULL) into Jg (6 x nj, row-major); the other columns are not written.
+ * Each column is computed by the same operations whichever are asked. */
+static cd_status gen_jacobian(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
+                              const int *cols, int ncols, cd_error *err)
 {
-    if (!m || !d || !p_body || !Jg) {
-        cd_error_set(err, CD_EINVAL, "cd_generalized_jacobian: %s is NULL", !m ? "the model" : !d ? "the data" : !p_body ? "p_body" : "Jg");
-        return CD_EINVAL;
-    }
-    int s = m->body_sys[body], n = m->sys_ndof[s], nj = n - 6, i, j, k;
+    int s = m->body_sys[body], n = m->sys_ndof[s], nj = n - 6, i, j, k, c;
     double *J = d->jwork, *Hb = J + 6 * n, *X = Hb + 36;
     if (m->sys_base_type[s] != CD_BASE_FREE) {
         cd_error_set(err, CD_EINVAL, "generalized Jacobian: system '%s' has a fixed base (use cd_point_jacobian)",
                      m->sys_name[s]);
         return CD_EINVAL;
     }
+    if (!cols) ncols = nj;
     cd_point_jacobian(m, d, body, p_body, J);
     cd_mass_matrix(m, d, s, d->H);
     /* X = H_b^-1 H_bq, one column at a time */
@@ -70,18 +71,37 @@ cd_status cd_generalized_jacobian(const cd_model *m, cd_data *d, int body, const
         cd_error_set(err, CD_ENUMERIC, "generalized Jacobian: the base inertia block of '%s' is singular", m->sys_name[s]);
         return CD_ENUMERIC;
     }
-    for (j = 0; j < nj; j++) {
+    for (c = 0; c < ncols; c++) {
         double col[6];
+        j = cols ? cols[c] : c;
         for (i = 0; i < 6; i++) col[i] = d->H[i * n + 6 + j];
         cd_chol_solve(Hb, 6, col);
         for (i = 0; i < 6; i++) X[6 * j + i] = col[i];
     }
     /* Jg = J_q - J_b X */
     for (i = 0; i < 6; i++)
-        for (j = 0; j < nj; j++) {
-            double v = J[i * n + 6 + j];
+        for (c = 0; c < ncols; c++) {
+            double v;
+            j = cols ? cols[c] : c;
+            v = J[i * n + 6 + j];
             for (k = 0; k < 6; k++) v -= J[i * n + k] * X[6 * j + k];
             Jg[i * nj + j] = v;
         }
     return CD_OK;
+}
+
+cd_status cd_generalized_jacobian(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
+                                  cd_error *err)
+{
+    if (!m || !d || !p_body || !Jg) {
+        cd_error_set(err, CD_EINVAL, "cd_generalized_jacobian: %s is NULL", !m ? "the model" : !d ? "the data" : !p_body ? "p_body" : "Jg");
+        return CD_EINVAL;
+    }
+    return gen_jacobian(m, d, body, p_body, Jg, NULL, 0, err);
+}
+
+cd_status cd_generalized_jacobian_cols(const cd_model *m, cd_data *d, int body, const double p_body[3], double *Jg,
+                                       const int *cols, int ncols)
+{
+    return gen_jacobian(m, d, body, p_body, Jg, cols, ncols, NULL);
 }
