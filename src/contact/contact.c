@@ -87,19 +87,25 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
  * exact query is skipped and the gap to that sphere stands in: dist is a
  * lower bound of the true distance (x = r - dist stays below
  * -CD_BROAD_MARGIN: the slot stays open, its switching function positive,
- * exactly as with the true distance), n and s point from the sphere's centre.
+ * exactly as with the true distance), n and s point from the sphere's centre
+ * (left unset when n is NULL: a caller that needs only the gap).
  * Returns 1 when culled, 0 when the exact query is needed. */
 #define CD_BROAD_MARGIN 1e-6
 static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r, double *dist,
                     double n[3], double s[3])
 {
     const double *xs = d->shape_xw + 3 * sh;
-    double t[3], dd, rb = m->shape_rbound[sh];
+    double t[3], dd, rb = m->shape_rbound[sh], lim = rb + r + CD_BROAD_MARGIN;
     if (!(rb < HUGE_VAL)) return 0;
     cd_v3_sub(t, pw, xs);
-    dd = cd_v3_norm(t);
+    dd = cd_v3_dot(t, t);
+    /* clearly inside the culling distance: the decision below without its
+     * square root (a margin of 1e-10 relative covers every rounding) */
+    if (dd < lim * lim * (1.0 - 1e-10)) return 0;
+    dd = sqrt(dd);
     if (!(dd - rb > r + CD_BROAD_MARGIN)) return 0;
     *dist = dd - rb;
+    if (!n) return 1;
     cd_v3_scale(n, t, 1.0 / dd);
     cd_v3_copy(s, xs);
     cd_v3_axpy(s, rb, n);
@@ -143,15 +149,17 @@ static void vpow(double r[3], const double a[3], double K, double p)
 
 /* Geometry of slot k at the evaluated pose: the check point's centre pw,
  * the penetration x, the normal n and the surface point s (world). An open
- * slot beyond the shape's bounding sphere gets the sphere's gap (far_open).
- * Returns 0, or -1 for a rejected query (x, n, s then unset). */
-static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, double pw[3], double *x, double n[3],
-                         double s[3])
+ * slot beyond the shape's bounding sphere gets the sphere's gap (far_open;
+ * with x_only its n and s are left unset: x < 0 there, and a caller that
+ * skips such a slot needs x alone). Returns 0, or -1 for a rejected query
+ * (x, n, s then unset). */
+static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, int x_only, double pw[3], double *x,
+                         double n[3], double s[3])
 {
     int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
     double r = m->cp_radius[cp], dist;
     cd_point_world(m, d, m->cp_body[cp], m->cp_pos + 3 * cp, pw, NULL);
-    if (open && (res = far_open(m, d, sh, pw, r, &dist, n, s)) == 1) res = 0;
+    if (open && (res = far_open(m, d, sh, pw, r, &dist, x_only ? NULL : n, s)) == 1) res = 0;
     else if ((res = query_world(m, d, sh, pw, open ? r + CD_BROAD_MARGIN : HUGE_VAL, &dist, n, s)) == 1) res = 0;
     if (res == 0) *x = r - dist;
     return res;
@@ -188,7 +196,7 @@ static int open_outputs(const cd_model *m, const cd_data *d, int k, double *x, d
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double pw[3], s[3];
-    if (slot_geometry(m, d, k, 1, pw, x, n, s) != 0) return -1;
+    if (slot_geometry(m, d, k, 1, 0, pw, x, n, s) != 0) return -1;
     slot_rates(m, d, k, *x, n, s, c, xd, vt);
     *fraw = cd_law_normal(L, *x, *xd, NULL, NULL);
     return 0;
@@ -241,7 +249,7 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
     int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
     double cw[3], R = m->group_radius[g], dist, n[3], s[3];
     cd_point_world(m, d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw, NULL);
-    if (far_open(m, d, sh, cw, R, &dist, n, s) == 1) {
+    if (far_open(m, d, sh, cw, R, &dist, NULL, NULL) == 1) {
         *xb = R - dist;
         return 1;
     }
@@ -331,7 +339,8 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
     double pw[3], n[3], s[3], c[3], vt[3];
     double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
     double *z = d->y + m->ny_slot_adr + 3 * k;
-    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, pw, &x, n, s);
+    /* with the broad phase an open slot found beyond the bounding sphere is skipped below */
+    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, mode == CD_MODE_OPEN && d->opt.broad_phase, pw, &x, n, s);
     d->slot_geomfail[k] = (res < 0);
     d->slot_far[k] = 0;
     zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
@@ -507,7 +516,7 @@ int cd_contact_switch_near(const cd_model *m, const cd_data *d, int k, double g[
     if (d->slot_mode[k] == CD_MODE_OPEN) {
         if (d->slot_far[k]) {
             double pw[3], n[3], s[3];
-            if (slot_geometry(m, d, k, 1, pw, &x, n, s) != 0) x = 0.0; /* (never: accepted at the evaluation) */
+            if (slot_geometry(m, d, k, 1, 1, pw, &x, n, s) != 0) x = 0.0; /* (never: accepted at the evaluation) */
         }
         if (x < -r) return 0;
     }
