@@ -113,14 +113,18 @@ static void random_state(const cd_model *m, cd_data *d, int probe)
 Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
 {
     /* 3000 random poses of the probe (72 slots against a plane, sphere,
-     * box, cylinder, capsule and hull), all slots open: a slot the broad
+     * box, cylinder, capsule and hull), then 2000 of a random walk of small
+     * moves (where the free spheres cached by the last evaluation certify
+     * slots apart; each cached sphere is checked to be free: its centre is
+     * at least its radius from the shape by the exact query), all slots
+     * open but in poses 2000-2999: a slot the broad
      * phase skips must have x < 0 by the exact query (cd_shape_distance on
      * the check point, independent of the evaluation), i.e. every touching
      * slot is evaluated; and against the full evaluation of the same state
      * the derivative, every slot output (through cd_contact_slot_outputs)
      * and both switching functions are bit-identical. Then, with a third of
      * the slots closed (stick or slip), none of those is skipped either. */
-    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0, nleft = 0;
+    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0, nleft = 0, nfree = 0;
     cd_model *m = scene(&probe);
     cd_error e;
     cd_data *d1 = cd_data_create(m, 0, &e), *d0;
@@ -129,9 +133,26 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
     cr_assert(d0, "%s", e.msg);
     cr_assert_eq(d1->opt.broad_phase, 1, "on by default");
     d0->opt.broad_phase = 0;
-    for (pose = 0; pose < 3000; pose++) {
-        int closed = pose >= 2000;
-        random_state(m, d1, probe);
+    for (pose = 0; pose < 5000; pose++) {
+        int closed = pose >= 2000 && pose < 3000;
+        if (pose < 3000 || pose % 500 == 0) {
+            random_state(m, d1, probe);
+        } else {
+            /* a random walk of small moves (<= 0.5 mm, 0.01 rad) from the last pose: the free
+             * spheres of the last evaluation certify most apart slots (slot_free) */
+            cd_sys_state st = cd_state_of(m, d1, probe);
+            double dq[4], qn[4], nq;
+            int i;
+            for (i = 0; i < 3; i++) st.pos[i] += 1e-3 * (bp_urand() - 0.5);
+            dq[0] = 1.0;
+            for (i = 1; i < 4; i++) dq[i] = 5e-3 * (2.0 * bp_urand() - 1.0);
+            qn[0] = st.quat[0] * dq[0] - st.quat[1] * dq[1] - st.quat[2] * dq[2] - st.quat[3] * dq[3];
+            qn[1] = st.quat[0] * dq[1] + st.quat[1] * dq[0] + st.quat[2] * dq[3] - st.quat[3] * dq[2];
+            qn[2] = st.quat[0] * dq[2] - st.quat[1] * dq[3] + st.quat[2] * dq[0] + st.quat[3] * dq[1];
+            qn[3] = st.quat[0] * dq[3] + st.quat[1] * dq[2] - st.quat[2] * dq[1] + st.quat[3] * dq[0];
+            nq = sqrt(qn[0] * qn[0] + qn[1] * qn[1] + qn[2] * qn[2] + qn[3] * qn[3]);
+            for (i = 0; i < 4; i++) st.quat[i] = qn[i] / nq;
+        }
         memcpy(d0->y, d1->y, (size_t)m->ny * sizeof(double));
         d0->t = d1->t;
         for (k = 0; k < m->nslot; k++) {
@@ -183,6 +204,13 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
                       same3(vt, d0->slot_vt + 3 * k), "pose %d slot %d: point, normal, slip velocity", pose, k);
             cr_assert(same(d1->slot_fn[k], d0->slot_fn[k]) && same3(d1->slot_ft + 3 * k, d0->slot_ft + 3 * k),
                       "pose %d slot %d: forces", pose, k);
+            if (d1->slot_free[4 * k + 3] > 0) { /* a cached free sphere is free */
+                double fd, fn[3], fs[3];
+                cr_assert_eq(cd_shape_distance(m, sh, d1->slot_free + 4 * k, 0.0, &fd, fn, fs), 0);
+                cr_assert(fd >= d1->slot_free[4 * k + 3] - 1e-12, "pose %d slot %d: free sphere of radius %.17g, "
+                          "its centre %.17g from the shape", pose, k, d1->slot_free[4 * k + 3], fd);
+                if (pose >= 3000 && d1->slot_free[4 * k + 3] > m->cp_radius[cp]) nfree++;
+            }
             cd_contact_switch(m, d1, k, 0, g1);
             cd_contact_switch(m, d0, k, 0, g0);
             cr_assert(same(g0[0], g1[0]) && same(g0[1], g1[1]), "pose %d slot %d: switching functions", pose, k);
@@ -220,10 +248,13 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
             cr_assert(memcmp(d1->slot_x, d0->slot_x, (size_t)m->nslot * sizeof(double)) == 0);
         }
     }
-    cr_log_info("3000 poses x 72 slots: %d touching, %d skipped (%d with a bound for x: by the group or a bounding sphere)",
+    cr_log_info("5000 poses x 72 slots: %d touching, %d skipped (%d with a bound for x: by the group, a bounding "
+                "sphere or a free sphere)",
                 ntouch, nskip, nfar_bound);
     cr_expect_gt(ntouch, 1000, "the poses bring many check points into contact");
     cr_expect_gt(nskip, 50000, "most open slots are skipped");
+    cr_log_info("%d free spheres larger than the check point in the random walk", nfree);
+    cr_expect_gt(nfree, 10000, "the walk's evaluations cache free spheres");
     cr_expect_gt(nfar_bound, 1000, "many before their own exact query");
     cr_log_info("%d open slots left out of the smallest switching function (apart by more than r)", nleft);
     cr_expect_gt(nleft, 10000, "most open slots are apart by more than r");

@@ -192,10 +192,15 @@ typedef struct cd_data {
     int *slot_geomfail;   /* (nslot) 1 if the last geometry query was rejected */
     int *slot_far;        /* (nslot) 1 if the last evaluation's broad phase skipped the slot (open and
                              apart; opt.broad_phase): slot_fn = 0 and slot_ft = 0 are current, slot_x
-                             is x or (a skipped group of several check points) an upper bound of it,
+                             is x or (a skipped group of several check points, a free sphere) an upper bound of it,
                              < 0; slot_xdot, slot_fnraw, slot_point, slot_normal, slot_vt are not
                              updated: cd_contact_slot_outputs gives every output as the full
                              evaluation would, cd_contact_complete fills them in */
+    double *slot_free;    /* (nslot x 4) broad-phase cache of open slots: a point of the shape's frame
+                             and a lower bound of its signed distance to the shape, from an earlier
+                             evaluation (a free sphere: any check-point centre closer to that point
+                             than the bound minus r is apart); zeroed by cd_data_reset and
+                             cd_state_set; a radius <= 0 holds nothing */
     int *slot_held;       /* (nslot) 1 while the chattering guard suspends the slot's switches
                              (= sw_held): its forces are then clipped to f_n >= 0 and |f_t| <= mu_max f_n */
 

@@ -37,6 +37,16 @@
 #include "geometry.h"
 #include "contact.h"
 
+/* The world position of a point fixed on body b: cd_point_world's
+ * operations (x_b + R_b p), here where the compiler can inline them (a
+ * call per slot and evaluation cost more than the arithmetic). */
+static void body_point(const cd_data *d, int b, const double pb[3], double pw[3])
+{
+    double t[3];
+    cd_m3_mulv(t, d->body_R + 9 * b, pb);
+    cd_v3_add(pw, d->body_x + 3 * b, t);
+}
+
 /* world pose of every shape, once per evaluation (d->shape_R, shape_xw) */
 static void shape_poses(const cd_model *m, cd_data *d)
 {
@@ -65,21 +75,34 @@ static int shape_query(const cd_model *m, int sh, const double p[3], double beyo
 
 /* query in world coordinates (n, s in world); returns 0 (exact), 1 (a hull's
  * plane bound beyond `beyond`, see shape_query) or -1 for a rejected answer */
-static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double beyond,
+static void to_shape(const cd_data *d, int sh, const double pw[3], double pl[3])
+{
+    double t[3];
+    cd_v3_sub(t, pw, d->shape_xw + 3 * sh);
+    cd_m3_tmulv(pl, d->shape_R + 9 * sh, t);
+}
+
+/* query_world with the point already in the shape frame (pl) */
+static int query_local(const cd_model *m, const cd_data *d, int sh, const double pl[3], double beyond,
                        double *dist, double n[3], double s[3])
 {
     const double *R = d->shape_R + 9 * sh, *x = d->shape_xw + 3 * sh;
-    double pl[3], t[3], nl[3], sl[3];
-    int res;
-    cd_v3_sub(t, pw, x);
-    cd_m3_tmulv(pl, R, t);
-    res = shape_query(m, sh, pl, beyond, dist, nl, sl);
+    double t[3], nl[3], sl[3];
+    int res = shape_query(m, sh, pl, beyond, dist, nl, sl);
     if (res >= 0) {
         cd_m3_mulv(n, R, nl);
         cd_m3_mulv(t, R, sl);
         cd_v3_add(s, x, t);
     }
     return res;
+}
+
+static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double beyond,
+                       double *dist, double n[3], double s[3])
+{
+    double pl[3];
+    to_shape(d, sh, pw, pl);
+    return query_local(m, d, sh, pl, beyond, dist, n, s);
 }
 
 /* Broad phase of an OPEN slot: a check point (radius r) farther than
@@ -154,14 +177,36 @@ static void vpow(double r[3], const double a[3], double K, double p)
  * skips such a slot needs x alone). Returns 0, or -1 for a rejected query
  * (x, n, s then unset). */
 static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, int x_only, double pw[3], double *x,
-                         double n[3], double s[3])
+                         double n[3], double s[3], double *free_sp)
 {
     int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
-    double r = m->cp_radius[cp], dist;
-    cd_point_world(m, d, m->cp_body[cp], m->cp_pos + 3 * cp, pw, NULL);
-    if (open && (res = far_open(m, d, sh, pw, r, &dist, x_only ? NULL : n, s)) == 1) res = 0;
-    else if ((res = query_world(m, d, sh, pw, open ? r + CD_BROAD_MARGIN : HUGE_VAL, &dist, n, s)) == 1) res = 0;
-    if (res == 0) *x = r - dist;
+    double r = m->cp_radius[cp], dist, pl[3];
+    body_point(d, m->cp_body[cp], m->cp_pos + 3 * cp, pw);
+    if (open && (res = far_open(m, d, sh, pw, r, &dist, x_only ? NULL : n, s)) == 1) {
+        *x = r - dist;
+        return 0;
+    }
+    to_shape(d, sh, pw, pl);
+    if (free_sp && free_sp[3] > r + CD_BROAD_MARGIN) {
+        /* the free sphere of an earlier evaluation (cd_data.slot_free): the
+         * signed distance is 1-Lipschitz, so dist(pl) >= its radius minus
+         * how far pl is from its centre */
+        double t[3], lb;
+        cd_v3_sub(t, pl, free_sp);
+        lb = free_sp[3] - cd_v3_norm(t);
+        if (lb > r + CD_BROAD_MARGIN) {
+            *x = r - lb;
+            return 0;
+        }
+    }
+    if ((res = query_local(m, d, sh, pl, open ? r + CD_BROAD_MARGIN : HUGE_VAL, &dist, n, s)) == 1) res = 0;
+    if (res == 0) {
+        *x = r - dist;
+        if (free_sp) { /* dist (exact, or a face plane's bound) is a lower bound: a free sphere */
+            cd_v3_copy(free_sp, pl);
+            free_sp[3] = dist;
+        }
+    }
     return res;
 }
 
@@ -196,7 +241,7 @@ static int open_outputs(const cd_model *m, const cd_data *d, int k, double *x, d
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double pw[3], s[3];
-    if (slot_geometry(m, d, k, 1, 0, pw, x, n, s) != 0) return -1;
+    if (slot_geometry(m, d, k, 1, 0, pw, x, n, s, NULL) != 0) return -1;
     slot_rates(m, d, k, *x, n, s, c, xd, vt);
     *fraw = cd_law_normal(L, *x, *xd, NULL, NULL);
     return 0;
@@ -248,7 +293,7 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
 {
     int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
     double cw[3], R = m->group_radius[g], dist, n[3], s[3];
-    cd_point_world(m, d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw, NULL);
+    body_point(d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw);
     if (far_open(m, d, sh, cw, R, &dist, NULL, NULL) == 1) {
         *xb = R - dist;
         return 1;
@@ -334,13 +379,14 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
 {
     int cp = m->slot_cp[k], sh = m->slot_shape[k], mode = d->slot_mode[k];
-    int ba = m->cp_body[cp], bb = m->shape_body[sh], res;
+    int ba = m->cp_body[cp], bb = m->shape_body[sh], res, open_bp = mode == CD_MODE_OPEN && d->opt.broad_phase;
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double pw[3], n[3], s[3], c[3], vt[3];
     double x, xd, fraw, fn = 0, ft[3] = {0, 0, 0}, F[6], arm[3];
     double *z = d->y + m->ny_slot_adr + 3 * k;
-    /* with the broad phase an open slot found beyond the bounding sphere is skipped below */
-    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, mode == CD_MODE_OPEN && d->opt.broad_phase, pw, &x, n, s);
+    /* with the broad phase an open slot found apart (beyond the bounding
+     * sphere, or inside its free sphere) is skipped below, x a bound */
+    res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, open_bp, pw, &x, n, s, open_bp ? d->slot_free + 4 * k : NULL);
     d->slot_geomfail[k] = (res < 0);
     d->slot_far[k] = 0;
     zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
@@ -516,7 +562,7 @@ int cd_contact_switch_near(const cd_model *m, const cd_data *d, int k, double g[
     if (d->slot_mode[k] == CD_MODE_OPEN) {
         if (d->slot_far[k]) {
             double pw[3], n[3], s[3];
-            if (slot_geometry(m, d, k, 1, 1, pw, &x, n, s) != 0) x = 0.0; /* (never: accepted at the evaluation) */
+            if (slot_geometry(m, d, k, 1, 1, pw, &x, n, s, NULL) != 0) x = 0.0; /* (never: accepted at the evaluation) */
         }
         if (x < -r) return 0;
     }

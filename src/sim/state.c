@@ -206,6 +206,8 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
 #undef PUT
     }
     p = set_body(m, d, buf + HEADER);
+    /* the broad phase's free spheres start afresh, as in a fresh data */
+    memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double));
     if (cd_forward(m, d) != CD_OK) {
         double t = d->t;
         (void)set_body(m, d, undo);
