@@ -55,18 +55,15 @@ cd_status cd_aba_forward(const cd_model *m, cd_data *d, int s)
     double *udot = d->udot + va, *W = d->work;
     cd_sys_state st = cd_state_of(m, d, s);
 
-    /* pass 1 (any order): rigid-body inertias I_b, bias forces
+    /* pass 1 (any order): rigid-body inertias I_b (from cd_kinematics), bias forces
      * p_b = V_b x* I_b V_b - f_ext_b, velocity-product accelerations
      * c_b = V_b x (S_b qd_b) */
     for (b = b0; b < b0 + nb; b++) {
-        double *w = W + CD_ABA_WORK_PER_BODY * b, Iw[9], c[3], IV[6];
+        double *w = W + CD_ABA_WORK_PER_BODY * b, IV[6];
         const double *V = d->body_V + 6 * b;
-        cd_rbi I;
-        cd_m3_rotsym(Iw, d->body_R + 9 * b, m->body_inertia + 9 * b);
-        cd_v3_sub(c, d->body_c + 3 * b, d->sys_ref + 3 * s);
-        cd_rbi_make(&I, m->body_mass[b], c, Iw);
-        rbi_to_mat(w + W_IA, &I);
-        cd_rbi_mulv(IV, &I, V);
+        const cd_rbi *I = (const cd_rbi *)d->body_rbi + b; /* cd_kinematics' */
+        rbi_to_mat(w + W_IA, I);
+        cd_rbi_mulv(IV, I, V);
         cd_sv_crossf(w + W_PA, V, IV);
         for (i = 0; i < 6; i++) w[W_PA + i] -= d->body_fext[6 * b + i];
         if (b > b0) {

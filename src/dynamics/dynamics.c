@@ -18,18 +18,6 @@
 #include <string.h>
 
 /* spatial inertia of every body of system s about its reference point */
-static void body_inertias(const cd_model *m, cd_data *d, int s)
-{
-    cd_rbi *I = (cd_rbi *)d->body_rbi;
-    int b, b0 = m->sys_body_adr[s];
-    for (b = b0; b < b0 + m->sys_nbody[s]; b++) {
-        double Iw[9], c[3];
-        cd_m3_rotsym(Iw, d->body_R + 9 * b, m->body_inertia + 9 * b);
-        cd_v3_sub(c, d->body_c + 3 * b, d->sys_ref + 3 * s);
-        cd_rbi_make(&I[b], m->body_mass[b], c, Iw);
-    }
-}
-
 void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udot, double *tau)
 {
     if (!m || !d || !tau) return;
@@ -38,7 +26,6 @@ void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udo
     cd_rbi *I = (cd_rbi *)d->body_rbi;
     double *A = d->work, *F = d->work + 6 * m->nbody; /* (nbody x 6) each */
     double *A0 = A + 6 * b0, t[6], IV[6];
-    body_inertias(m, d, s);
     /* base acceleration, gravity as a fictitious upward acceleration */
     if (free_base) {
         double *v0 = d->body_v + 3 * b0, *w0 = d->body_w + 3 * b0;
@@ -80,7 +67,6 @@ void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
     int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], n = m->sys_ndof[s], b, i, k;
     int free_base = m->sys_base_type[s] == CD_BASE_FREE, j0 = free_base ? 6 : 0;
     cd_rbi *I = (cd_rbi *)d->body_rbi, *Ic = (cd_rbi *)d->body_rbi + m->nbody;
-    body_inertias(m, d, s);
     for (b = b0; b < b0 + nb; b++) Ic[b] = I[b];
     for (b = b0 + nb - 1; b > b0; b--) cd_rbi_add(&Ic[m->body_parent[b]], &Ic[b]);
     memset(H, 0, (size_t)n * (size_t)n * sizeof(double));

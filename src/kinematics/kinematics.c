@@ -66,6 +66,15 @@ void cd_kinematics(const cd_model *m, cd_data *d)
             cd_v3_cross(t, Vb, r);
             cd_v3_add(d->body_v + 3 * b, Vb + 3, t);
         }
+        /* every body's spatial inertia about P in world axes, once per
+         * evaluation for the dynamics (ABA, CRBA, RNE, the controllers'
+         * mass matrices) */
+        for (b = b0; b < b0 + nb; b++) {
+            double Iw[9], c[3];
+            cd_m3_rotsym(Iw, d->body_R + 9 * b, m->body_inertia + 9 * b);
+            cd_v3_sub(c, d->body_c + 3 * b, P);
+            cd_rbi_make((cd_rbi *)d->body_rbi + b, m->body_mass[b], c, Iw);
+        }
     }
 }
 
