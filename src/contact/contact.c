@@ -304,12 +304,15 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
 }
 
 /* An open slot skipped by the broad phase: no force, no anchor rate, x (or
- * an upper bound of it, < 0) and the mark; the rest on demand. */
+ * an upper bound of it, < 0) and the mark; the rest on demand. zdot is the
+ * data's own d->ydot (cd_forward), which only evaluations write: a slot
+ * skipped by the last one already has its zeros there and in its forces. */
 static void skip_slot(cd_data *d, int k, double x, double *zdot)
 {
+    d->slot_x[k] = x;
+    if (d->slot_far[k]) return;
     d->slot_far[k] = 1;
     d->slot_geomfail[k] = 0;
-    d->slot_x[k] = x;
     d->slot_fn[k] = 0;
     cd_v3_zero(d->slot_ft + 3 * k);
     zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
@@ -387,6 +390,15 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
     /* with the broad phase an open slot found apart (beyond the bounding
      * sphere, or inside its free sphere) is skipped below, x a bound */
     res = slot_geometry(m, d, k, mode == CD_MODE_OPEN, open_bp, pw, &x, n, s, open_bp ? d->slot_free + 4 * k : NULL);
+    if (res == 0 && open_bp && x < 0) {
+        /* broad phase: an open slot apart from its shape (x < 0: its
+         * switching function -min(K x, f_raw) > 0, it cannot switch here)
+         * exerts no force and has no anchor rate; the rest of its outputs
+         * (rate, point, normal, slip velocity, f_raw) is computed only
+         * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
+        skip_slot(d, k, x, zdot);
+        return;
+    }
     d->slot_geomfail[k] = (res < 0);
     d->slot_far[k] = 0;
     zdot[3 * k] = zdot[3 * k + 1] = zdot[3 * k + 2] = 0.0;
@@ -401,15 +413,6 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
         cd_v3_zero(d->slot_vt + 3 * k);
         cd_v3_copy(d->slot_point + 3 * k, pw);
         cd_v3_zero(d->slot_normal + 3 * k);
-        return;
-    }
-    if (mode == CD_MODE_OPEN && x < 0 && d->opt.broad_phase) {
-        /* broad phase: an open slot apart from its shape (x < 0: its
-         * switching function -min(K x, f_raw) > 0, it cannot switch here)
-         * exerts no force and has no anchor rate; the rest of its outputs
-         * (rate, point, normal, slip velocity, f_raw) is computed only
-         * when asked for (cd_contact_slot_outputs, cd_contact_switch) */
-        skip_slot(d, k, x, zdot);
         return;
     }
     slot_rates(m, d, k, x, n, s, c, &xd, vt);

@@ -39,7 +39,9 @@ static inline double cd_law_normal(const cd_contact_law *L, double x, double xd,
 
 /* Evaluates every slot after cd_kinematics: fills the slot outputs, adds the
  * wrenches to d->body_fext and writes the anchors' derivatives into zdot
- * (3 per slot). */
+ * (3 per slot). zdot must be the data's own d->ydot + m->ny_slot_adr, the
+ * same buffer at every evaluation: a slot the broad phase skipped at the
+ * last evaluation and skips again keeps the zeros written then. */
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot);
 
 /* Switching functions of slot k (g[0] normal, g[1] friction; negative =
