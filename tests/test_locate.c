@@ -1,0 +1,78 @@
+/* Event location when the step's interpolant is off (src/sim/integrator.c,
+ * locate and probe): a check point on a body spinning at a constant rate
+ * meets a plane on a circle, so its approach is not a cubic and the cubic
+ * Hermite interpolant of a long step (h_max 0.05 s) misplaces the crossing
+ * by more than the 1e-10 s the events are located to. The certification by
+ * the integrator's own step then fails on one end; the probe brackets the
+ * crossing near that end instead of iterating over the rest of the step.
+ * The onset must still land at the closed-form time, and the locator steps
+ * stay few: with the bracket over the rest of the step (the code before the
+ * probe, 831ed9f) rk8pd took 23 and 25 here at w = 10 and 30 rad/s. */
+#include <criterion/criterion.h>
+#include <capdyn/capdyn.h>
+#include "scene_util.h"
+
+#include <math.h>
+
+/* rotor of check-point radius r = 0.01 at 0.2 m from its spin axis (z),
+ * spinning at w; the plane's solid is y >= 0.15: onset when
+ * 0.2 sin(w t) + 0.01 = 0.15, t* = asin(0.7) / w */
+static void spin_run(cd_stepper stepper, double w, double *t_ev, int *kind, long *nloc)
+{
+    cd_model *m = cd_model_create();
+    cd_error e;
+    cd_data *d;
+    double Rs[9] = {1, 0, 0, 0, 0, -1, 0, 1, 0}, ps[3] = {0, 0.15, 0}, cp[3] = {0.2, 0, 0}, wv[3] = {0, 0, 0};
+    cd_contact_law law = cd_contact_law_default();
+    int ground, rotor, sh, lid;
+    wv[2] = w;
+    ground = add_system(m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    rotor = add_system(m, "rotor", CD_BASE_FREE, 1.0, 0.01, NULL, NULL, wv);
+    sh = cd_model_add_shape(m, m->sys_body_adr[ground], CD_SHAPE_PLANE, ps, Rs, NULL, NULL, 0, &e);
+    cr_assert(sh >= 0, "%s", e.msg);
+    cr_assert(cd_model_add_checkpoint(m, m->sys_body_adr[rotor], cp, 0.01, &e) >= 0, "%s", e.msg);
+    law.K = 1e4; law.D = 10; law.mu_s = law.mu_k = 0;
+    lid = cd_model_add_law(m, &law, &e);
+    cr_assert(lid >= 0, "%s", e.msg);
+    cr_assert(cd_model_add_pair(m, rotor, -1, sh, lid, &e) >= 0, "%s", e.msg);
+    m->gravity[0] = m->gravity[1] = m->gravity[2] = 0;
+    cr_assert_eq(cd_model_finalize(m, &e), CD_OK, "%s", e.msg);
+    m->opt.stepper = stepper;
+    m->opt.h_max = 0.05;
+    m->opt.rtol = 1e-10;
+    m->opt.atol = 1e-12;
+    d = cd_data_create(m, 16, &e);
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 1.05 * asin(0.7) / w, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    cr_assert_geq(d->ev_count, 1, "the check point reaches the plane");
+    *t_ev = cd_data_event(d, 0)->t;
+    *kind = cd_data_event(d, 0)->kind;
+    *nloc = d->stats.nlocate_steps;
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(locate, onset_on_a_circle_at_the_closed_form_time_with_few_locator_steps)
+{
+    /* the onset within 2e-10 s of t* (the 1e-10 s bracket plus the
+     * integration's error at rtol 1e-10, ~1e-11 s at 1.4 m/s), in at most 8
+     * locator steps (2 when both certifications hold; the old bracket over
+     * the rest of the step took 23 and 25), at two spin rates and with
+     * rk8pd and auto */
+    const cd_stepper st[2] = {CD_STEP_RK8PD, CD_STEP_AUTO};
+    const double w[2] = {10.0, 30.0};
+    int i, j;
+    for (i = 0; i < 2; i++)
+        for (j = 0; j < 2; j++) {
+            double t, ts = asin(0.7) / w[j];
+            int kind;
+            long nloc;
+            spin_run(st[i], w[j], &t, &kind, &nloc);
+            cr_log_info("%s, w = %g rad/s: onset at %.15g s (closed form %.15g, off by %.2e s), %ld locator steps",
+                        cd_stepper_name(st[i]), w[j], t, ts, t - ts, nloc);
+            cr_expect_eq(kind, CD_EV_ONSET);
+            cr_expect_leq(fabs(t - ts), 2e-10, "%s, w %g: onset at %.15g s, closed form %.15g s", cd_stepper_name(st[i]),
+                          w[j], t, ts);
+            cr_expect_leq(nloc, 8, "%s, w %g: %ld locator steps", cd_stepper_name(st[i]), w[j], nloc);
+        }
+}
