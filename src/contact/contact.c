@@ -73,8 +73,7 @@ static int shape_query(const cd_model *m, int sh, const double p[3], double beyo
     return cd_geom_analytic(m->shape_type[sh], m->shape_size + 3 * sh, p, dist, n, s);
 }
 
-/* query in world coordinates (n, s in world); returns 0 (exact), 1 (a hull's
- * plane bound beyond `beyond`, see shape_query) or -1 for a rejected answer */
+/* a world point in shape sh's frame */
 static void to_shape(const cd_data *d, int sh, const double pw[3], double pl[3])
 {
     double t[3];
@@ -97,6 +96,8 @@ static int query_local(const cd_model *m, const cd_data *d, int sh, const double
     return res;
 }
 
+/* query in world coordinates (n, s in world); returns 0 (exact), 1 (a hull's
+ * plane bound beyond `beyond`, see shape_query) or -1 for a rejected answer */
 static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double beyond,
                        double *dist, double n[3], double s[3])
 {
@@ -174,8 +175,11 @@ static void vpow(double r[3], const double a[3], double K, double p)
  * the penetration x, the normal n and the surface point s (world). An open
  * slot beyond the shape's bounding sphere gets the sphere's gap (far_open;
  * with x_only its n and s are left unset: x < 0 there, and a caller that
- * skips such a slot needs x alone). Returns 0, or -1 for a rejected query
- * (x, n, s then unset). */
+ * skips such a slot needs x alone). With free_sp (the slot's free sphere,
+ * cd_data.slot_free: only the evaluation's broad phase, which skips an
+ * apart slot) a check point inside it gets x = r minus its bound, n and s
+ * unset, and an exact query leaves its own free sphere there. Returns 0, or
+ * -1 for a rejected query (x, n, s then unset). */
 static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, int x_only, double pw[3], double *x,
                          double n[3], double s[3], double *free_sp)
 {
@@ -502,7 +506,7 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
  * With forgive, zero-time re-checks pardon round-off in the friction
  * functions (e.g. slip -> stick with mu_s = mu_k lands exactly on the cone
  * and must not flip straight back). */
-static void switch_functions(const cd_model *m, const cd_data *d, int k, int forgive, double g[2], double *xout)
+void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, double g[2])
 {
     const cd_contact_law *L = &m->law[m->slot_law[k]];
     double x = d->slot_x[k], f = d->slot_fnraw[k];
@@ -512,7 +516,6 @@ static void switch_functions(const cd_model *m, const cd_data *d, int k, int for
         double xd, c[3], n[3], vt[3];
         (void)open_outputs(m, d, k, &x, &xd, &f, c, n, vt);
     }
-    *xout = x;
     /* min(K x, f_raw): the penetration scaled to a force so that min() compares like with like */
     double gn = L->pull ? x * L->K : ((x * L->K) < f ? x * L->K : f);
     g[1] = 1.0;
@@ -541,12 +544,6 @@ static void switch_functions(const cd_model *m, const cd_data *d, int k, int for
     }
 }
 
-void cd_contact_switch(const cd_model *m, const cd_data *d, int k, int forgive, double g[2])
-{
-    double x;
-    switch_functions(m, d, k, forgive, g, &x);
-}
-
 /* An open slot apart by more than its check point's radius is left out of
  * the smallest switching function. Its functions are positive (-min(K x,
  * f_raw) >= -K x > 0, and 1), so leaving it out moves no zero of that
@@ -569,7 +566,7 @@ int cd_contact_switch_near(const cd_model *m, const cd_data *d, int k, double g[
         }
         if (x < -r) return 0;
     }
-    switch_functions(m, d, k, 0, g, &x);
+    cd_contact_switch(m, d, k, 0, g);
     return 1;
 }
 
