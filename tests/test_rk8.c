@@ -170,7 +170,7 @@ Test(rk8, bound_step_skips_exactly_the_open_anchors, .timeout = 300)
     own = gsl_odeiv2_step_alloc(cd_step_rk8pd, (size_t)ny);
     ref = gsl_odeiv2_step_alloc(gsl_odeiv2_step_rk8pd, (size_t)ny);
     cr_assert(own && ref);
-    cd_rk8_bind(own, m, d);
+    cd_rk8_bind(own, &m, d);
     nr = cd_rk8_runs(own, &lo, &hi);
     for (i = 0, nskip = 0; i < ny; i++) nskip += !in_runs(i, nr, lo, hi);
     cr_expect_eq(nskip, 3 * nopen, "skipped %d unknowns, expected 3 x %d open slots", nskip, nopen);

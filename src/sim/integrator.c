@@ -228,8 +228,8 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
          * step as long as a stiff step would be unstable) */
         I->loc = gsl_odeiv2_step_alloc(rosenbrock(d->opt.stepper) ? T : cd_step_rk8pd, n);
         if (!I->loc) goto nomem;
-        if (T == cd_step_rk8pd) cd_rk8_bind(I->drv->s, m, d);
-        if (!rosenbrock(d->opt.stepper)) cd_rk8_bind(I->loc, m, d);
+        if (T == cd_step_rk8pd) cd_rk8_bind(I->drv->s, &I->m, d);
+        if (!rosenbrock(d->opt.stepper)) cd_rk8_bind(I->loc, &I->m, d);
         if (uses_rosw(d->opt.stepper)) cd_rosw_init(&I->rw, m, d, p + 1);
         if (rosenbrock(d->opt.stepper)) {
             cd_rosw_bind(I->drv->s, &I->rw, 0);

@@ -72,7 +72,7 @@ typedef struct {
     size_t dim;
     double *k[NST], *y0, *ytmp;
     int *lo, *hi, nrun;       /* the runs of the next step (capacity dim + 2 each) */
-    const cd_model *m;        /* bound model and data (NULL: every unknown) */
+    const cd_model *const *mp; /* where the bound model is, and the data (NULL: every unknown) */
     const cd_data *d;
 } rk8_state;
 
@@ -116,7 +116,7 @@ static void add_run(rk8_state *s, int a, int b)
 /* the unknowns that can move at the current modes (header) */
 static void runs(rk8_state *s)
 {
-    const cd_model *m = s->m;
+    const cd_model *m = s->mp ? *s->mp : NULL;
     int k;
     s->nrun = 0;
     if (!m || (size_t)m->ny != s->dim) {
@@ -211,10 +211,10 @@ static const gsl_odeiv2_step_type rk8_type = {"rk8pd", 1, 1, rk8_alloc, rk8_appl
                                               rk8_reset, rk8_order, rk8_free};
 const gsl_odeiv2_step_type *cd_step_rk8pd = &rk8_type;
 
-void cd_rk8_bind(gsl_odeiv2_step *s, const cd_model *m, const cd_data *d)
+void cd_rk8_bind(gsl_odeiv2_step *s, const cd_model *const *mp, const cd_data *d)
 {
     rk8_state *st = (rk8_state *)s->state;
-    st->m = m;
+    st->mp = mp;
     st->d = d;
 }
 

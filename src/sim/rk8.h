@@ -9,9 +9,12 @@
 /* The GSL stepper type (name "rk8pd", order 8). A step object bound to a
  * model and its data (cd_rk8_bind) works on the unknowns that can move:
  * everything but the stick anchors of the open contact slots, whose
- * derivative is exactly 0 (contact.c); unbound, on every unknown. */
+ * derivative is exactly 0 (contact.c); unbound, on every unknown. The
+ * model is reached through *mp, read at each step: the integrator's
+ * per-call model pointer (NULL between calls: the data keeps no model
+ * pointer), so a step while it is NULL works on every unknown. */
 extern const gsl_odeiv2_step_type *cd_step_rk8pd;
-void cd_rk8_bind(gsl_odeiv2_step *s, const cd_model *m, const cd_data *d);
+void cd_rk8_bind(gsl_odeiv2_step *s, const cd_model *const *mp, const cd_data *d);
 
 /* The unknowns the next step of s advances, as runs [lo[i], hi[i]) in
  * increasing order; returns the number of runs (tests). */
