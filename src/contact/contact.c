@@ -34,18 +34,9 @@
  * The force F = f_n n + f_t acts on the check-point body at c, -F on the shape's. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "../kinematics/kinematics.h"
 #include "geometry.h"
 #include "contact.h"
-
-/* The world position of a point fixed on body b: cd_point_world's
- * operations (x_b + R_b p), here where the compiler can inline them (a
- * call per slot and evaluation cost more than the arithmetic). */
-static void body_point(const cd_data *d, int b, const double pb[3], double pw[3])
-{
-    double t[3];
-    cd_m3_mulv(t, d->body_R + 9 * b, pb);
-    cd_v3_add(pw, d->body_x + 3 * b, t);
-}
 
 /* world pose of every shape, once per evaluation (d->shape_R, shape_xw) */
 static void shape_poses(const cd_model *m, cd_data *d)
@@ -185,7 +176,7 @@ static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, i
 {
     int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
     double r = m->cp_radius[cp], dist, pl[3];
-    body_point(d, m->cp_body[cp], m->cp_pos + 3 * cp, pw);
+    cd_body_point(d, m->cp_body[cp], m->cp_pos + 3 * cp, pw);
     if (open && (res = far_open(m, d, sh, pw, r, &dist, x_only ? NULL : n, s)) == 1) {
         *x = r - dist;
         return 0;
@@ -297,7 +288,7 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
 {
     int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
     double cw[3], R = m->group_radius[g], dist, n[3], s[3];
-    body_point(d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw);
+    cd_body_point(d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw);
     if (far_open(m, d, sh, cw, R, &dist, NULL, NULL) == 1) {
         *xb = R - dist;
         return 1;

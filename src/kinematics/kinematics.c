@@ -2,6 +2,7 @@
  * queries. Contact and mechanism use these; they never need dynamics. */
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
+#include "kinematics.h"
 
 #include <string.h>
 
@@ -84,8 +85,7 @@ void cd_point_world(const cd_model *m, const cd_data *d, int b, const double pb[
     if (!m || !d || !pb) return;
     double t[3], p[3];
     (void)m;
-    cd_m3_mulv(t, d->body_R + 9 * b, pb);
-    cd_v3_add(p, d->body_x + 3 * b, t);
+    cd_body_point(d, b, pb, p);
     if (vw) {
         /* v = v_c + w x (p - c) */
         cd_v3_sub(t, p, d->body_c + 3 * b);

@@ -590,26 +590,38 @@ static int implicit_with_explicit_locator(const cd_integ *I)
     return !I->stiff && (I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF);
 }
 
+/* One locator step to t0 + tau, and the bracket end it certifies: the new
+ * side (g < 0: *newside = 1) moves hi, its state kept in I->yhi; the old
+ * side moves lo. */
+static cd_status bracket_at(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, double *lo,
+                            double *hi, double *glo, double *ghi, int *newside)
+{
+    double g;
+    cd_status st = trial(m, d, I, t0, tau, I->ylo);
+    if (st != CD_OK) return st;
+    g = gmin(m, d, 1, NULL);
+    *newside = g < 0;
+    if (*newside) {
+        *hi = tau; *ghi = g;
+        memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
+    } else {
+        *lo = tau; *glo = g;
+    }
+    return CD_OK;
+}
+
 static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, int side, double s, double *lo,
                        double *hi, double *glo, double *ghi)
 {
     double dist = side > 0 ? *glo / -s : *ghi / s;
-    int k;
+    int k, newside;
     for (k = 0; k < 3 && *hi - *lo > d->opt.event_tol; k++, dist *= 4.0) {
-        double tp = side > 0 ? *lo + 1.5 * dist + d->opt.event_tol : *hi - 1.5 * dist - d->opt.event_tol, g;
+        double tp = side > 0 ? *lo + 1.5 * dist + d->opt.event_tol : *hi - 1.5 * dist - d->opt.event_tol;
         cd_status st;
         if (!(tp > *lo && tp < *hi) || !budget_left(d, I, trial_cost(I))) break;
-        st = trial(m, d, I, t0, tp, I->ylo);
+        st = bracket_at(m, d, I, t0, tp, lo, hi, glo, ghi, &newside);
         if (st != CD_OK) return st;
-        g = gmin(m, d, 1, NULL);
-        if (g < 0) {
-            *hi = tp; *ghi = g;
-            memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
-            if (side > 0) break;
-        } else {
-            *lo = tp; *glo = g;
-            if (side < 0) break;
-        }
+        if (newside == (side > 0)) break; /* past the crossing: bracketed */
     }
     return CD_OK;
 }
@@ -643,25 +655,21 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     glo = gmin(m, d, 1, NULL);
     if (!(glo > 0)) glo = 0.0;
     if (!I->fixed) {
-        double ilo = lo, ihi = hi, iglo = glo, ighi = ghi, g;
+        double ilo = lo, ihi = hi, iglo = glo, ighi = ghi;
         st = illinois(m, d, I, t0, h, 1, &ilo, &ihi, &iglo, &ighi);
         if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-        int failed = 0; /* a certification that failed: +1 the upper end, -1 the lower */
+        int failed = 0, newside; /* a certification that failed: +1 the upper end, -1 the lower */
         /* certify the upper end with the integrator's own step */
         if (ihi < hi && budget_left(d, I, trial_cost(I))) {
-            st = trial(m, d, I, t0, ihi, I->ylo);
+            st = bracket_at(m, d, I, t0, ihi, &lo, &hi, &glo, &ghi, &newside);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-            g = gmin(m, d, 1, NULL);
-            if (g < 0) { hi = ihi; ghi = g; memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double)); }
-            else { lo = ihi; glo = g; failed = 1; }
+            if (!newside) failed = 1;
         }
         /* and the lower end, if the upper one held */
         if (hi == ihi && ilo > lo && budget_left(d, I, trial_cost(I))) {
-            st = trial(m, d, I, t0, ilo, I->ylo);
+            st = bracket_at(m, d, I, t0, ilo, &lo, &hi, &glo, &ghi, &newside);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-            g = gmin(m, d, 1, NULL);
-            if (g >= 0) { lo = ilo; glo = g; }
-            else { hi = ilo; ghi = g; memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double)); failed = -1; }
+            if (newside) failed = -1;
         }
         if (failed && ihi > ilo && ighi - iglo < 0 && !implicit_with_explicit_locator(I)) {
             st = probe(m, d, I, t0, failed, (ighi - iglo) / (ihi - ilo), &lo, &hi, &glo, &ghi);
