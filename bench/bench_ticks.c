@@ -22,8 +22,10 @@
  * are counted while a tick runs), and the run's status.
  *
  * Usage: bench_ticks [-o results.txt] [--loop example|capture]... [--stepper NAME]...
- *                    [--set KEY=VALUE]...
- * (run from the repository root). --set overrides a key of the capture
+ *                    [--set KEY=VALUE]... [--ticks FILE]
+ * (run from the repository root). --ticks writes one row per tick (time,
+ * evaluations, steps, rejections, events, locating work, stiff stepper used)
+ * for finding what the long ticks do. --set overrides a key of the capture
  * scenario after the stepper's (e.g. the flight-loop setting of
  * docs/performance.md: --set simulation.rtol=1e-6 --set simulation.atol=1e-9). */
 #include <capdyn/capdyn.h>
@@ -114,10 +116,18 @@ static void report(const char *loop, const char *stepper, double period, ticks *
 }
 
 /* one tick's bookkeeping around the work done between w0/c0/n0/a0 and now */
-static void tick_done(ticks *t, double period, double w0, double c0, long n0, long a0, const cd_data *d)
+static FILE *tick_file; /* --ticks FILE: one row per tick */
+static void tick_done(ticks *t, double period, double w0, double c0, long n0, long a0, const cd_data *d,
+                      const char *loop, const char *stepper, const cd_stats *s0)
 {
     double w = clock_s(CLOCK_MONOTONIC) - w0, c = clock_s(CLOCK_THREAD_CPUTIME_ID) - c0;
     long a = nalloc - a0;
+    if (tick_file)
+        fprintf(tick_file, "%s %s %ld %.4f %.4f %.4f %ld %ld %ld %ld %ld %ld %d\n", loop,
+                stepper, t->n, d->t, 1e3 * w, 1e3 * c, d->stats.nrhs - n0,
+                d->stats.nsteps - s0->nsteps, d->stats.nrejected - s0->nrejected, d->stats.nevents - s0->nevents,
+                d->stats.nlocate_interp - s0->nlocate_interp, d->stats.nlocate_steps - s0->nlocate_steps,
+                d->stats.t_stiff > s0->t_stiff);
     t->wall[t->n] = w;
     t->cpu[t->n] = c;
     t->evals[t->n] = (double)(d->stats.nrhs - n0);
@@ -154,12 +164,13 @@ static void loop_example(cd_stepper stepper)
     for (k = 0; k < n_ticks; k++) {
         double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
         long n0 = d->stats.nrhs, a0 = nalloc;
+        cd_stats s0 = d->stats;
         counting = 1;
         if (control_tick(m, d, &ctl, &ids) != 0) { counting = 0; st = CD_ENUMERIC; snprintf(err.msg, sizeof err.msg, "controller"); break; }
         st = cd_step(m, d, h, &err);
         counting = 0;
         if (st != CD_OK) break;
-        tick_done(&t, h, w0, c0, n0, a0, d);
+        tick_done(&t, h, w0, c0, n0, a0, d, "example", cd_stepper_name(stepper), &s0);
     }
     report("example", cd_stepper_name(stepper), h, &t, d, st, st == CD_OK ? "" : err.msg);
     ticks_free(&t);
@@ -205,11 +216,12 @@ static void loop_capture(cd_stepper stepper)
     for (k = 0; k < n_ticks; k++) {
         double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
         long n0 = d->stats.nrhs, a0 = nalloc;
+        cd_stats s0 = d->stats;
         counting = 1;
         st = cd_sim_advance(sc->model, d, (double)(k + 1) * period, NULL, NULL, &err);
         counting = 0;
         if (st != CD_OK) break;
-        tick_done(&t, period, w0, c0, n0, a0, d);
+        tick_done(&t, period, w0, c0, n0, a0, d, "capture", cd_stepper_name(stepper), &s0);
     }
     report("capture", cd_stepper_name(stepper), period, &t, d, st, st == CD_OK ? "" : err.msg);
     ticks_free(&t);
@@ -239,10 +251,14 @@ int main(int argc, char **argv)
             int s = cd_stepper_from_name(argv[++i]);
             if (s < 0) { fprintf(stderr, "%s: unknown stepper '%s'\n", argv[0], argv[i]); return 2; }
             steppers[nstep++] = (cd_stepper)s;
+        } else if (!strcmp(argv[i], "--ticks") && i + 1 < argc) {
+            if (!(tick_file = fopen(argv[++i], "w"))) { fprintf(stderr, "%s: cannot open %s\n", argv[0], argv[i]); return 1; }
+            fprintf(tick_file, "# loop stepper tick t wall_ms cpu_ms evals steps rejected events locate_interp "
+                               "locate_steps stiff\n");
         } else if (!strcmp(argv[i], "--set") && i + 1 < argc && n_user_sets < MAX_SETS) {
             user_sets[n_user_sets++] = argv[++i];
         } else {
-            fprintf(stderr, "usage: %s [-o file] [--loop example|capture]... [--stepper NAME]... [--set KEY=VALUE]...\n",
+            fprintf(stderr, "usage: %s [-o file] [--loop example|capture]... [--stepper NAME]... [--set KEY=VALUE]... [--ticks FILE]\n",
                     argv[0]);
             return 2;
         }
@@ -264,5 +280,6 @@ int main(int argc, char **argv)
         for (i = 0; i < (nstep ? nstep : (int)(sizeof cap_default / sizeof *cap_default)); i++)
             loop_capture(nstep ? steppers[i] : cap_default[i]);
     if (out_file) fclose(out_file);
+    if (tick_file) fclose(tick_file);
     return 0;
 }

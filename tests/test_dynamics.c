@@ -17,6 +17,7 @@
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include "../src/dynamics/jacobian.h"
+#include "../src/dynamics/mass.h"
 
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_errno.h>
@@ -1657,6 +1658,47 @@ Test(dynamics, generalized_jacobian_with_zero_momentum)
                         cr_expect_eq(Jc[i * nj + k], -7.0, "trial %d: column %d not asked for, written", trial, k);
                 }
         }
+        cd_data_free(d);
+        cd_model_free(m);
+    }
+}
+
+Test(dynamics, mass_matrix_on_some_columns_is_the_whole_ones_there)
+{
+    /* cd_mass_matrix_cols (the capture controller's: the arm's diagonal, and
+     * the base rows of the generalized Jacobian's columns): on random 1-12
+     * joint trees, free and fixed base, every other joint from trial % 3,
+     * the asked joints' diagonal, the base block and the asked joints' base
+     * rows and columns equal the whole H bit for bit; every other entry is
+     * left as it was. */
+    int trial;
+    rng_state = 0x9E3779B97F4A7C15ULL;
+    for (trial = 0; trial < 60; trial++) {
+        int nj = 1 + trial % 12, free_base = trial % 2 == 0, n, i, j, k, nc = 0, cols[12], asked[18];
+        cd_model *m = random_tree(nj, free_base);
+        cd_data *d = mkdata(m);
+        double H[18 * 18], Hc[18 * 18];
+        random_state(m, d);
+        cd_kinematics(m, d);
+        n = m->sys_ndof[0];
+        cd_mass_matrix(m, d, 0, H);
+        for (k = trial % 3; k < nj; k += 2) cols[nc++] = k;
+        for (i = 0; i < n; i++) asked[i] = free_base && i < 6;
+        for (k = 0; k < nc; k++) asked[(free_base ? 6 : 0) + cols[k]] = 1;
+        for (k = 0; k < n * n; k++) Hc[k] = -7.0;
+        cd_mass_matrix_cols(m, d, 0, Hc, cols, nc);
+        for (i = 0; i < n; i++)
+            for (j = 0; j < n; j++) {
+                /* written: an asked joint's diagonal, the base block, an asked joint against the base */
+                int base_i = free_base && i < 6, base_j = free_base && j < 6;
+                int w = (i == j && asked[i]) || (base_i && base_j) || (base_i && asked[j]) || (base_j && asked[i]);
+                if (w)
+                    cr_expect(memcmp(&Hc[i * n + j], &H[i * n + j], sizeof(double)) == 0,
+                              "trial %d (%d joints, %s base): H[%d][%d] %.17g vs %.17g", trial, nj,
+                              free_base ? "free" : "fixed", i, j, Hc[i * n + j], H[i * n + j]);
+                else
+                    cr_expect_eq(Hc[i * n + j], -7.0, "trial %d: H[%d][%d] not asked for, written", trial, i, j);
+            }
         cd_data_free(d);
         cd_model_free(m);
     }

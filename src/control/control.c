@@ -39,6 +39,7 @@
 #include "capdyn/control.h"
 #include "../math/cd_math.h"
 #include "../dynamics/jacobian.h"
+#include "../dynamics/mass.h"
 
 #include <math.h>
 #include <stdlib.h>
@@ -380,7 +381,9 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     if (phase == CD_CTRL_DETUMBLE) {
         detumble_torques(c, m, d, tau);
     } else if (phase == CD_CTRL_HOLD) {
-        cd_mass_matrix(m, d, k->sys, d->H);
+        int cols[MAXJ];
+        for (i = 0; i < c->na; i++) cols[i] = c->arm[i] - b0 - 1;
+        cd_mass_matrix_cols(m, d, k->sys, d->H, cols, c->na); /* only the arm's diagonal is read */
         for (i = 0; i < c->na; i++) {
             int col = 6 + c->arm[i] - b0 - 1;
             double Hjj = d->H[col * n + col];
@@ -417,7 +420,8 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
                 qd_ref[i] = s;
                 if (fabs(s) > big) big = fabs(s);
             }
-            /* (d->H is the chaser's mass matrix, left by cd_generalized_jacobian) */
+            /* (d->H holds the arm's diagonal of the chaser's mass matrix, left by
+             * cd_generalized_jacobian_cols) */
             for (i = 0; i < c->na; i++) {
                 int col = 6 + c->arm[i] - b0 - 1;
                 if (big > k->qd_max) qd_ref[i] *= k->qd_max / big;

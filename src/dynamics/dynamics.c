@@ -13,6 +13,7 @@
 #include "../math/cd_math.h"
 #include "../kinematics/prescribed.h"
 #include "aba.h"
+#include "mass.h"
 #include "capdyn/dynamics.h"
 
 #include <string.h>
@@ -61,24 +62,30 @@ void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udo
     }
 }
 
-void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
+/* H of system s by CRBA (composite inertias Ic in world axes about the
+ * system's reference point). With cols, only the entries of the joints
+ * cols[0..ncols) on the diagonal and in the base rows and columns, and the
+ * base block, each by the same operations as the whole H (mass.h). */
+static void mass_matrix(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols)
 {
-    if (!m || !d || !H) return;
-    int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], n = m->sys_ndof[s], b, i, k;
+    int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], n = m->sys_ndof[s], b, c, i, k;
     int free_base = m->sys_base_type[s] == CD_BASE_FREE, j0 = free_base ? 6 : 0;
     cd_rbi *I = (cd_rbi *)d->body_rbi, *Ic = (cd_rbi *)d->body_rbi + m->nbody;
     for (b = b0; b < b0 + nb; b++) Ic[b] = I[b];
     for (b = b0 + nb - 1; b > b0; b--) cd_rbi_add(&Ic[m->body_parent[b]], &Ic[b]);
-    memset(H, 0, (size_t)n * (size_t)n * sizeof(double));
-    for (b = b0 + 1; b < b0 + nb; b++) {
-        int ib = j0 + b - b0 - 1, a;
+    if (!cols) memset(H, 0, (size_t)n * (size_t)n * sizeof(double));
+    for (c = 0; c < (cols ? ncols : nb - 1); c++) {
+        int ib, a;
         double F[6];
+        b = b0 + 1 + (cols ? cols[c] : c);
+        ib = j0 + b - b0 - 1;
         cd_rbi_mulv(F, &Ic[b], d->body_S + 6 * b);
         H[ib * n + ib] = cd_sv_dot(d->body_S + 6 * b, F);
-        for (a = m->body_parent[b]; a > b0; a = m->body_parent[a]) {
-            int ia = j0 + a - b0 - 1;
-            H[ia * n + ib] = H[ib * n + ia] = cd_sv_dot(d->body_S + 6 * a, F);
-        }
+        if (!cols)
+            for (a = m->body_parent[b]; a > b0; a = m->body_parent[a]) {
+                int ia = j0 + a - b0 - 1;
+                H[ia * n + ib] = H[ib * n + ia] = cd_sv_dot(d->body_S + 6 * a, F);
+            }
         if (free_base)
             for (k = 0; k < 3; k++) {
                 H[k * n + ib] = H[ib * n + k] = F[3 + k];           /* v0 rows: force */
@@ -99,6 +106,17 @@ void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
             }
         }
     }
+}
+
+void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
+{
+    if (!m || !d || !H) return;
+    mass_matrix(m, d, s, H, NULL, 0);
+}
+
+void cd_mass_matrix_cols(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols)
+{
+    mass_matrix(m, d, s, H, cols, ncols);
 }
 
 /* prescribed accelerations of system s into a (ndof); returns how many DoFs are prescribed */

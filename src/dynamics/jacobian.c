@@ -6,6 +6,7 @@
 #include "capdyn/sim.h"
 #include "../math/cd_math.h"
 #include "jacobian.h"
+#include "mass.h"
 
 #include <string.h>
 
@@ -63,7 +64,8 @@ static cd_status gen_jacobian(const cd_model *m, cd_data *d, int body, const dou
     }
     if (!cols) ncols = nj;
     cd_point_jacobian(m, d, body, p_body, J);
-    cd_mass_matrix(m, d, s, d->H);
+    if (cols) cd_mass_matrix_cols(m, d, s, d->H, cols, ncols); /* the base block and rows, the diagonal */
+    else cd_mass_matrix(m, d, s, d->H);
     /* X = H_b^-1 H_bq, one column at a time */
     for (i = 0; i < 6; i++)
         for (j = 0; j < 6; j++) Hb[6 * i + j] = d->H[i * n + j];
