@@ -38,6 +38,14 @@ $(BENCH_TICKS): bench/bench_ticks.c bench/bench_util.h examples/control_loop_mod
 	$(CC) $(CFLAGS_ALL) -D_POSIX_C_SOURCE=199309L -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
 
+# the stiffest modes of a scenario's state at a time of its run (a
+# diagnostic for what caps an explicit step: bench/stiff_modes.c)
+BENCH_MODES = $(BUILD)/stiff_modes
+$(BENCH_MODES): bench/stiff_modes.c $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
 bench-deps: deps
 	@bash scripts/install-bench-deps.sh
 
