@@ -176,6 +176,10 @@ typedef struct {
     double joint_damping; /* [N m s/rad], default 0 */
     int joint_limited;    /* 1: compliant stops at [joint_lower, joint_upper] of each link; default 0 */
     double joint_lower[CD_HAND_MAX_LINKS], joint_upper[CD_HAND_MAX_LINKS]; /* [rad] */
+    double joint_stop_K[CD_HAND_MAX_LINKS], joint_stop_D[CD_HAND_MAX_LINKS]; /* the stops' law per link
+                             (cd_joint_props stop_K, stop_D); 0 = the defaults: K 1e3 N m/rad, D critical
+                             for the subtree's inertia (docs/dynamics.md says where that overdamps) */
+    double joint_stop_p, joint_stop_q; /* its exponents, every finger joint; 0 = 1 */
     double q0[CD_HAND_MAX_LINKS]; /* initial angles [rad], default 0 */
     /* the drive */
     double torque;        /* motor torque (SOFT, TAKO), grasp torque after the clutch (SPACE) [N m], default 0.2 */

@@ -169,6 +169,8 @@ static int build_finger(cd_model *m, const cd_hand_desc *h, cd_hand *out, int f,
     fjp.stiffness = h->joint_spring;
     fjp.damping = h->joint_damping;
     fjp.limited = h->joint_limited ? 1 : 0;
+    fjp.stop_p = h->joint_stop_p;
+    fjp.stop_q = h->joint_stop_q;
     er[0] = cos(phi); er[1] = 0; er[2] = sin(phi);
     ax[0] = -er[2]; ax[1] = 0; ax[2] = er[0];
     for (j = 0; j < h->nlink; j++) {
@@ -195,6 +197,8 @@ static int build_finger(cd_model *m, const cd_hand_desc *h, cd_hand *out, int f,
         if (h->joint_limited) {
             fjp.lower = h->joint_lower[j];
             fjp.upper = h->joint_upper[j];
+            fjp.stop_K = h->joint_stop_K[j];
+            fjp.stop_D = h->joint_stop_D[j];
             if (d.q0 < fjp.lower - 1e-12 || d.q0 > fjp.upper + 1e-12) {
                 cd_error_set(err, CD_EINVAL, "hand: link %d: initial angle %g rad outside its stops [%g, %g] rad", j, d.q0, fjp.lower, fjp.upper);
                 return -1;

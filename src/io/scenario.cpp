@@ -1686,7 +1686,7 @@ struct Builder {
         Entry *e = t.get("finger_joint");
         if (!e) return;
         std::string fp = t.kp("finger_joint");
-        Tab ft(table_of(*e->val, fp), fp, {"spring", "damping", "limit_deg", "q0_deg"});
+        Tab ft(table_of(*e->val, fp), fp, {"spring", "damping", "limit_deg", "q0_deg", "stop"});
         h.joint_spring = ft.num("spring", 0.0, Range::NonNeg);
         h.joint_damping = ft.num("damping", 0.0, Range::NonNeg);
         if (Entry *l = ft.get("limit_deg")) {
@@ -1713,6 +1713,26 @@ struct Builder {
             }
             flim_node = &ln;
             h.joint_limited = 1;
+        }
+        if (Entry *st_e = ft.get("stop")) {
+            /* the stops' law, as a link's `stop` (every finger joint) */
+            std::string sp = ft.kp("stop");
+            if (!h.joint_limited) fail_at(st_e->kloc, sp, "a stop needs the finger joints' limit_deg");
+            Tab st(table_of(*st_e->val, sp), sp, {"K", "D", "p", "q"});
+            /* K and D: one number for every link, or one per finger link (base to tip) */
+            auto per_link = [&](const char *k, Range r, double *out) {
+                Entry *ke = st.get(k);
+                if (!ke) return;
+                if (ke->val->kind == NK::Array)
+                    vec_of(*ke->val, st.kp(k), h.nlink, out, r,
+                           ("a number or " + std::to_string(h.nlink) + " numbers (one per finger link)").c_str());
+                else
+                    for (int j = 0; j < h.nlink; j++) out[j] = num_of(*ke->val, st.kp(k), r);
+            };
+            per_link("K", Range::Pos, h.joint_stop_K);
+            per_link("D", Range::NonNeg, h.joint_stop_D);
+            h.joint_stop_p = st.num("p", 0.0, Range::Ge1);
+            h.joint_stop_q = st.num("q", 0.0, Range::Pos);
         }
         if (Entry *q = ft.get("q0_deg")) {
             const Node &qn = *q->val;
