@@ -8,6 +8,8 @@
 #
 # Usage: bash bench/steps_per_second.sh SCENARIO.toml [--set KEY=VALUE]...
 #        BIN=build/capdyn PY=build/venv/bin/python (h5py)
+#        DT=0.1 (the bins' width in simulated seconds, default 1; set the
+#        scenario's simulation.output_dt finer than DT to see inside them)
 set -u
 cd "$(dirname "$0")/.."
 BIN=${BIN:-build/capdyn}
@@ -19,7 +21,7 @@ tmp=$(mktemp -d)
 trap 'rm -rf "$tmp"' EXIT
 "$BIN" run "$@" -o "$tmp/run.h5" > "$tmp/log" 2>&1 || { cat "$tmp/log" >&2; exit 1; }
 grep -E '^(integrator|capture|wall time)' "$tmp/log"
-"$PY" - "$tmp/run.h5" <<'EOF'
+"$PY" - "$tmp/run.h5" "${DT:-1}" <<'EOF'
 import sys
 import h5py
 import numpy as np
@@ -28,15 +30,19 @@ t = f["/time"][:]
 g = f["/diagnostics"]
 steps, rej, rhs, ev, h = (g[k][:] for k in ("nsteps", "nrejected", "nrhs", "nevents", "step_size"))
 mode = f["/contacts/mode"][:] if "/contacts/mode" in f else None
-print("%6s %8s %8s %10s %7s %11s %6s %5s" % ("t [s]", "steps", "rejected", "evals", "events", "median h", "stick", "slip"))
-for s in range(int(np.floor(t[0])), int(np.ceil(t[-1]))):
-    i0 = int(np.searchsorted(t, s))
-    i1 = int(np.searchsorted(t, s + 1, side="right")) - 1
+w = float(sys.argv[2])
+if not w > 0:
+    sys.exit("DT must be a positive number of seconds")
+print("%11s %8s %8s %10s %7s %11s %6s %5s" % ("t [s]", "steps", "rejected", "evals", "events", "median h", "stick", "slip"))
+for b in range(int(np.floor(t[0] / w + 1e-9)), int(np.ceil(t[-1] / w - 1e-9))):
+    t0, t1 = b * w, (b + 1) * w
+    i0 = int(np.searchsorted(t, t0 - 1e-12))
+    i1 = int(np.searchsorted(t, t1 + 1e-12, side="right")) - 1
     if i1 <= i0:
         continue
     st = sl = 0
     if mode is not None:
         st, sl = int((mode[i1] == 1).sum()), int((mode[i1] == 2).sum())
-    print("%2d-%-3d %8d %8d %10d %7d %11.3g %6d %5d" % (s, s + 1, steps[i1] - steps[i0], rej[i1] - rej[i0],
+    print("%5g-%-5g %8d %8d %10d %7d %11.3g %6d %5d" % (t0, t1, steps[i1] - steps[i0], rej[i1] - rej[i0],
           rhs[i1] - rhs[i0], ev[i1] - ev[i0], float(np.median(h[i0 + 1:i1 + 1])), st, sl))
 EOF
