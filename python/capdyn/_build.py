@@ -382,6 +382,9 @@ typedef struct {
     int joint_limited;
     double joint_lower[...];
     double joint_upper[...];
+    double joint_stop_K[...];
+    double joint_stop_D[...];
+    double joint_stop_p, joint_stop_q;
     double q0[...];
     double torque, close_time, close_angle, close_start;
     int close_on_trigger;

@@ -583,7 +583,7 @@ class Model(_ModelView):
         "tako", "space", "torque_switch"; layout "two_opposed", "three_120",
         "two_pairs", "two_interleaved"; fields of cd_hand_desc (attach_body,
         palm_size, palm_pos, nlink, link_length, link_mass, radius, spacing,
-        joint_limited, joint_lower, joint_upper, q0, torque, close_time,
+        joint_limited, joint_lower, joint_upper, joint_stop_K, joint_stop_D, q0, torque, close_time,
         close_angle, close_start, clutch_threshold, ...: arrays of
         CD_HAND_MAX_LINKS entries may be given shorter, the rest 0). Returns a
         Hand; then add_hand_drive(hand, ...) once the targets exist."""
@@ -598,7 +598,8 @@ class Model(_ModelView):
         f = dict(fields, name=name)
         if f.get("attach_body") is not None and f["attach_body"] != -1:
             f["attach_body"] = self._body(f["attach_body"], "attach_body")
-        for k in ("link_length", "link_mass", "joint_lower", "joint_upper", "q0", "ratio"):
+        for k in ("link_length", "link_mass", "joint_lower", "joint_upper", "joint_stop_K", "joint_stop_D", "q0",
+                  "ratio"):
             if f.get(k) is not None:  # per-link arrays: the given links, the rest as the default
                 cur = getattr(d, k)
                 v = _vec(f.pop(k), None, f"add_hand.{k}")

@@ -55,6 +55,21 @@ def test_space_gripper_capture_from_python():
 
 
 @needs
+def test_finger_stop_law_per_link_reaches_the_description():
+    """joint_stop_K / joint_stop_D (cd_hand_desc, one per finger link) are
+    per-link arrays like joint_lower: the given links set, the rest 0 (the
+    default law); the hand builds with them."""
+    pi = 3.14159265358979
+    m = capdyn.Model()
+    hand = m.add_hand(type="soft", link_length=[0.08, 0.07], link_mass=[0.15, 0.1], joint_limited=1,
+                      joint_lower=[0.0, 0.0], joint_upper=[pi, pi], joint_stop_D=[2.6, 0.41], joint_stop_K=[500.0])
+    d = hand._desc
+    assert list(d.joint_stop_D[0:3]) == [2.6, 0.41, 0.0]
+    assert list(d.joint_stop_K[0:2]) == [500.0, 0.0]
+    assert hand.nfinger == 2 and hand.nlink == 2
+
+
+@needs
 def test_builder_errors_are_the_engines():
     m = capdyn.Model()
     with pytest.raises(capdyn.CapdynError):
