@@ -262,6 +262,38 @@ Test(cli, free_floating_arm_conserves_momentum_in_the_file)
     rm_rf(dir);
 }
 
+/* capdyn run of a shipped scenario (with one --set, or none) into a fresh
+ * directory: its summary (stdout), the directory removed */
+static char *summary_of(const char *scenario, const char *set)
+{
+    char dir[64], sc[512], h5[256], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, scenario);
+    snprintf(h5, sizeof h5, "%s/run.h5", dir);
+    rc = set ? capdyn(dir, &out, &err, "run", sc, "--set", set, "-o", h5, (char *)NULL)
+             : capdyn(dir, &out, &err, "run", sc, "-o", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "%s: exit %d: %s", scenario, rc, err);
+    free(err);
+    rm_rf(dir);
+    return out;
+}
+
+Test(cli, the_summary_states_an_initial_overlap)
+{
+    /* scenarios/soft_wrap.toml starts with 16 check points of the fingers
+     * inside the prism, the deepest 7.62 mm (slot 295, finger 1's second
+     * link): the summary says so, with the deepest one. Fig. 3's scene starts
+     * apart and then makes contact: no such line. */
+    char *wrap = summary_of("soft_wrap.toml", "simulation.duration=0.001"), *fig3 = summary_of("paper_fig3_impact.toml", NULL);
+    cr_expect(wrap && strstr(wrap, "initial overlap  16 check points inside their shapes at the first sample, t = 0 s") &&
+                  strstr(wrap, "(deepest 7.62 mm: slot 295, hand/f1_l1 cp 79 -> object (convex))"),
+              "%s", wrap);
+    cr_expect(fig3 && strstr(fig3, "in contact at some time") && !strstr(fig3, "initial overlap"), "%s", fig3);
+    free(wrap);
+    free(fig3);
+}
+
 Test(cli, export_columns_parse)
 {
     /* Every export of the ball run: a '# ' header, then rows with exactly

@@ -280,6 +280,37 @@ static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, c
     return 1;
 }
 
+/* Check points already inside their shapes at the first sample (x > 0):
+ * their contacts close at once with K x, and the run starts with that
+ * transient. Usually a set-up error (a body placed overlapping another); an
+ * equilibrium start or a grasp begun closed has it too, at its static
+ * depth, so it is stated, not refused. */
+static void report_initial_overlap(FILE *out, const cd_h5r *r)
+{
+    cd_error err;
+    double *x = r->n > 0 ? cd_h5r_series(r, "/contacts/penetration", NULL, &err) : NULL;
+    double *t = x ? cd_h5r_series(r, "/time", NULL, &err) : NULL;
+    int k, n = 0, kmax = -1;
+    char lab[512], line[1024];
+    if (!x) return;
+    for (k = 0; k < r->nslot; k++)
+        if (x[k] > 0) {
+            n++;
+            if (kmax < 0 || x[k] > x[kmax]) kmax = k;
+        }
+    if (n > 0) {
+        slot_label(r, kmax, lab, sizeof lab);
+        snprintf(line, sizeof line,
+                 "%d check point%s inside %s shape%s at the first sample, t = %.6g s (deepest %.4g mm: slot %d, %s); "
+                 "their contacts start closed, the run with their transient",
+                 n, n == 1 ? "" : "s", n == 1 ? "its" : "their", n == 1 ? "" : "s", t ? t[0] : 0.0,
+                 1e3 * x[kmax], kmax, lab);
+        print_wrapped_kv(out, "initial overlap", line);
+    }
+    free(x);
+    free(t);
+}
+
 /* The contacts: slots that closed with their peaks at the samples and, from
  * a run's x or else from the file, over every step (the same lines in
  * capdyn run and capdyn info). */
@@ -315,6 +346,7 @@ static void report_contacts(FILE *out, const cd_h5r *r, const cli_run_extra *x)
         print_wrapped_kv(out, "peak fn at samples", line);
         if (x && x->fn_body && x->fn_onset) report_step_peaks(out, r, x, nslot);
         else if (why[0]) print_wrapped_kv(out, "peak fn over steps", why);
+        report_initial_overlap(out, r);
     }
     free(mfn); free(mft); free(fn); free(ft); free(mode); free(sbuf);
 }
