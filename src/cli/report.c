@@ -302,7 +302,7 @@ static void report_initial_overlap(FILE *out, const cd_h5r *r)
         slot_label(r, kmax, lab, sizeof lab);
         snprintf(line, sizeof line,
                  "%d check point%s inside %s shape%s at the first sample, t = %.6g s (deepest %.4g mm: slot %d, %s); "
-                 "their contacts start closed, the run with their transient",
+                 "their contacts start closed and the run begins with their transient",
                  n, n == 1 ? "" : "s", n == 1 ? "its" : "their", n == 1 ? "" : "s", t ? t[0] : 0.0,
                  1e3 * x[kmax], kmax, lab);
         print_wrapped_kv(out, "initial overlap", line);
