@@ -106,13 +106,17 @@ static int query_world(const cd_model *m, const cd_data *d, int sh, const double
  * (left unset when n is NULL: a caller that needs only the gap).
  * Returns 1 when culled, 0 when the exact query is needed. */
 #define CD_BROAD_MARGIN 1e-6
-static int far_open(const cd_model *m, const cd_data *d, int sh, const double pw[3], double r, double *dist,
-                    double n[3], double s[3])
+static int far_open(const cd_model *m, const cd_data *d, int sh, double px, double py, double pz, double r,
+                    double *dist, double n[3], double s[3])
 {
     const double *xs = d->shape_xw + 3 * sh;
     double t[3], dd, rb = m->shape_rbound[sh], lim = rb + r + CD_BROAD_MARGIN;
     if (!(rb < HUGE_VAL)) return 0;
-    cd_v3_sub(t, pw, xs);
+    /* the point by value: it was just computed, and reading it back from
+     * memory as a vector stalled on the store (store forwarding) */
+    t[0] = px - xs[0];
+    t[1] = py - xs[1];
+    t[2] = pz - xs[2];
     dd = cd_v3_dot(t, t);
     /* clearly inside the culling distance: the decision below without its
      * square root (a margin of 1e-10 relative covers every rounding) */
@@ -177,7 +181,7 @@ static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, i
     int cp = m->slot_cp[k], sh = m->slot_shape[k], res;
     double r = m->cp_radius[cp], dist, pl[3];
     cd_body_point(d, m->cp_body[cp], m->cp_pos + 3 * cp, pw);
-    if (open && (res = far_open(m, d, sh, pw, r, &dist, x_only ? NULL : n, s)) == 1) {
+    if (open && (res = far_open(m, d, sh, pw[0], pw[1], pw[2], r, &dist, x_only ? NULL : n, s)) == 1) {
         *x = r - dist;
         return 0;
     }
@@ -289,7 +293,7 @@ static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
     int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
     double cw[3], R = m->group_radius[g], dist, n[3], s[3];
     cd_body_point(d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw);
-    if (far_open(m, d, sh, cw, R, &dist, NULL, NULL) == 1) {
+    if (far_open(m, d, sh, cw[0], cw[1], cw[2], R, &dist, NULL, NULL) == 1) {
         *xb = R - dist;
         return 1;
     }
