@@ -51,6 +51,7 @@ struct cd_ctrl {
     cd_ctrl_config c;
     int na;                 /* arm joints (base to palm) */
     int arm[MAXJ];
+    int arm_col[MAXJ];      /* their indices among the chaser's joints (columns of J_g; + 6 in H) */
     int nj;                 /* joints of the chaser */
     double *Jg;             /* (6 x nj) */
     double R0[9];           /* base attitude at t = 0 */
@@ -162,7 +163,10 @@ cd_ctrl *cd_ctrl_create(const cd_model *m, const cd_ctrl_config *cfg, cd_error *
     c->c = *cfg;
     cd_v3_normalize(c->c.approach_axis);
     c->na = n;
-    for (i = 0; i < n; i++) c->arm[i] = tmp[n - 1 - i];
+    for (i = 0; i < n; i++) {
+        c->arm[i] = tmp[n - 1 - i];
+        c->arm_col[i] = c->arm[i] - b0 - 1;
+    }
     c->nj = m->sys_ndof[cfg->sys] - 6;
     c->Jg = (double *)calloc((size_t)(6 * (c->nj > 0 ? c->nj : 1)), sizeof(double));
     if (!c->Jg) {
@@ -381,11 +385,9 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     if (phase == CD_CTRL_DETUMBLE) {
         detumble_torques(c, m, d, tau);
     } else if (phase == CD_CTRL_HOLD) {
-        int cols[MAXJ];
-        for (i = 0; i < c->na; i++) cols[i] = c->arm[i] - b0 - 1;
-        cd_mass_matrix_cols(m, d, k->sys, d->H, cols, c->na); /* only the arm's diagonal is read */
+        cd_mass_matrix_cols(m, d, k->sys, d->H, c->arm_col, c->na); /* only the arm's diagonal is read */
         for (i = 0; i < c->na; i++) {
-            int col = 6 + c->arm[i] - b0 - 1;
+            int col = 6 + c->arm_col[i];
             double Hjj = d->H[col * n + col];
             tau[i] = Hjj * (k->imp_wn * k->imp_wn * (c->q_hold[i] - cd_joint_q(m, d, c->arm[i])) -
                             2.0 * k->imp_zeta * k->imp_wn * cd_joint_qd(m, d, c->arm[i]));
@@ -393,10 +395,8 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
     } else {
         double V[6], M[36], y[6], qd_ref[MAXJ], big = 0;
         approach_twist(c, d, V);
-        int cols[MAXJ];
-        for (i = 0; i < c->na; i++) cols[i] = c->arm[i] - b0 - 1;
         /* the arm's columns only: the rest of J_g is not read */
-        if (cd_generalized_jacobian_cols(m, d, k->palm, k->palm_pos, c->Jg, cols, c->na) != CD_OK) {
+        if (cd_generalized_jacobian_cols(m, d, k->palm, k->palm_pos, c->Jg, c->arm_col, c->na) != CD_OK) {
             for (i = 0; i < c->na; i++) tau[i] = 0.0;
         } else {
             /* damped least squares over the arm's columns of J_g */
@@ -405,7 +405,7 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
                     double s = i == j ? k->dls * k->dls : 0.0;
                     int a;
                     for (a = 0; a < c->na; a++) {
-                        int col = c->arm[a] - b0 - 1;
+                        int col = c->arm_col[a];
                         s += c->Jg[i * c->nj + col] * c->Jg[j * c->nj + col];
                     }
                     M[6 * i + j] = s;
@@ -414,7 +414,7 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
             if (cd_chol_decomp(M, 6) != 0) memset(y, 0, sizeof y);
             else cd_chol_solve(M, 6, y);
             for (i = 0; i < c->na; i++) {
-                int col = c->arm[i] - b0 - 1;
+                int col = c->arm_col[i];
                 double s = 0;
                 for (j = 0; j < 6; j++) s += c->Jg[j * c->nj + col] * y[j];
                 qd_ref[i] = s;
@@ -423,7 +423,7 @@ void cd_ctrl_control(const cd_model *m, cd_data *d, void *user)
             /* (d->H holds the arm's diagonal of the chaser's mass matrix, left by
              * cd_generalized_jacobian_cols) */
             for (i = 0; i < c->na; i++) {
-                int col = 6 + c->arm[i] - b0 - 1;
+                int col = 6 + c->arm_col[i];
                 if (big > k->qd_max) qd_ref[i] *= k->qd_max / big;
                 tau[i] = d->H[col * n + col] * k->rate_gain * (qd_ref[i] - cd_joint_qd(m, d, c->arm[i]));
             }

@@ -65,8 +65,9 @@ void cd_inverse_dynamics(const cd_model *m, cd_data *d, int s, const double *udo
 /* H of system s by CRBA (composite inertias Ic in world axes about the
  * system's reference point). With cols, only the entries of the joints
  * cols[0..ncols) on the diagonal and in the base rows and columns, and the
- * base block, each by the same operations as the whole H (mass.h). */
-static void mass_matrix(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols)
+ * base block, each by the same operations as the whole H (mass.h); with
+ * cols NULL, the whole H. */
+void cd_mass_matrix_cols(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols)
 {
     int b0 = m->sys_body_adr[s], nb = m->sys_nbody[s], n = m->sys_ndof[s], b, c, i, k;
     int free_base = m->sys_base_type[s] == CD_BASE_FREE, j0 = free_base ? 6 : 0;
@@ -111,12 +112,7 @@ static void mass_matrix(const cd_model *m, cd_data *d, int s, double *H, const i
 void cd_mass_matrix(const cd_model *m, cd_data *d, int s, double *H)
 {
     if (!m || !d || !H) return;
-    mass_matrix(m, d, s, H, NULL, 0);
-}
-
-void cd_mass_matrix_cols(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols)
-{
-    mass_matrix(m, d, s, H, cols, ncols);
+    cd_mass_matrix_cols(m, d, s, H, NULL, 0);
 }
 
 /* prescribed accelerations of system s into a (ndof); returns how many DoFs are prescribed */

@@ -64,8 +64,7 @@ static cd_status gen_jacobian(const cd_model *m, cd_data *d, int body, const dou
     }
     if (!cols) ncols = nj;
     cd_point_jacobian(m, d, body, p_body, J);
-    if (cols) cd_mass_matrix_cols(m, d, s, d->H, cols, ncols); /* the base block and rows, the diagonal */
-    else cd_mass_matrix(m, d, s, d->H);
+    cd_mass_matrix_cols(m, d, s, d->H, cols, ncols); /* the base block and rows, the diagonal (cols NULL: all) */
     /* X = H_b^-1 H_bq, one column at a time */
     for (i = 0; i < 6; i++)
         for (j = 0; j < 6; j++) Hb[6 * i + j] = d->H[i * n + j];

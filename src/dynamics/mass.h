@@ -10,7 +10,8 @@
  * entry is left as it is (not zeroed). For the capture controller, which
  * reads the arm's diagonal, and the generalized Jacobian on some columns,
  * which reads the base rows: the couplings between joints, O(n depth) of
- * the whole H's work, are not computed. */
+ * the whole H's work, are not computed. cols NULL: the whole H, as
+ * cd_mass_matrix. */
 void cd_mass_matrix_cols(const cd_model *m, cd_data *d, int s, double *H, const int *cols, int ncols);
 
 #endif
