@@ -587,7 +587,7 @@ static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0,
  * of that locator the old bracket also shows at rtol 1e-11 and 3e-11). */
 static int implicit_with_explicit_locator(const cd_integ *I)
 {
-    return !I->stiff && (I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF);
+    return I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF; /* (never auto: I->stiff is auto's) */
 }
 
 /* One locator step to t0 + tau, and the bracket end it certifies: the new
