@@ -20,7 +20,12 @@ endif
 # warning, e.g. -Wmaybe-uninitialized under -fsanitize=thread); on by default
 WERROR  ?= 1
 WARN    = -Wall -Wextra -Wpedantic $(if $(filter 1,$(WERROR)),-Werror)
-OPT     ?= -O2 -g
+# -O3: the same results bit for bit as -O2 (no -ffast-math, and
+# -ffp-contract=off below: no reassociation, no fused multiply-add), and
+# 1.08-1.29x faster on the shipped scenarios (docs/performance.md section 13:
+# ROUNDS=9 bash bench/ab.sh with bench_scenarios built at -O2 and at -O3).
+# The build does not track flags: after changing OPT, make clean.
+OPT     ?= -O3 -g
 CFLAGS_ALL   = -std=c99 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
 CXXFLAGS_ALL = -std=c++17 $(WARN) $(OPT) -ffp-contract=off -Iinclude $(shell pkg-config --cflags $(PKGS_CORE) $(PKGS_IO) 2>/dev/null) $(EXTRA_CFLAGS)
 LIBS_CORE = $(shell pkg-config --libs $(PKGS_CORE) 2>/dev/null) -lm

@@ -77,8 +77,9 @@ static inline void sleep_s(double s)
  * dir/err.txt; env entries "K=V" are set in the child. Returns the pid. */
 static inline pid_t spawn(const char *dir, char *const argv[], char *const env[])
 {
-    char o[512], e[512];
+    char o[4096], e[4096];
     pid_t pid;
+    cr_assert(strlen(dir) + sizeof "/out.txt" <= sizeof o, "spawn: directory name too long: %s", dir);
     snprintf(o, sizeof o, "%s/out.txt", dir);
     snprintf(e, sizeof e, "%s/err.txt", dir);
     fflush(NULL);

@@ -76,7 +76,7 @@ static long momentum_through_capture(const char *const *ov, int nov, const char 
     run_t r;
     const cd_model *m;
     double P0[3], L0[3], dP = 0, dL = 0, Pmax = 0, Lmax = 0;
-    int s, k;
+    int s, k, first = 1;
     long nev_contact = 0, nev_clutch = 0, i;
     run_open(&r, HANDRAIL, ov, nov);
     m = r.sc->model;
@@ -90,7 +90,7 @@ static long momentum_through_capture(const char *const *ov, int nov, const char 
             if (sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) > Pmax) Pmax = sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
             if (sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]) > Lmax) Lmax = sqrt(l[0] * l[0] + l[1] * l[1] + l[2] * l[2]);
         }
-        if (r.d->t == 0) { memcpy(P0, P, sizeof P0); memcpy(L0, L, sizeof L0); }
+        if (first) { memcpy(P0, P, sizeof P0); memcpy(L0, L, sizeof L0); first = 0; } /* t = 0 */
         for (k = 0; k < 3; k++) e[k] = P[k] - P0[k];
         if (sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]) > dP) dP = sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
         for (k = 0; k < 3; k++) e[k] = L[k] - L0[k];

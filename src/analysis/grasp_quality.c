@@ -123,7 +123,7 @@ static void build_wrenches(const cd_grasp_contact *ct, int n, const double c[3],
 {
     const int planar = o->mode == CD_GRASP_PLANAR;
     const int m = planar ? 2 : o->cone_edges;
-    double e1[3], e2[3];
+    double e1[3] = {0, 0, 0}, e2[3] = {0, 0, 0}; /* set when planar */
     int i, j, a, row = 0;
     if (planar) {
         perp_unit(z, e1);

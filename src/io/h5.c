@@ -315,9 +315,11 @@ static int attr_f64v(hid_t obj, const char *name, int n, const double *v)
 /* An array of n strings, each at most len-1 characters. */
 static int attr_strv(hid_t obj, const char *name, int n, const char *const *v, size_t len)
 {
-    char *flat = calloc((size_t)n, len);
+    char *flat;
     hid_t t;
     int i, r;
+    if (n < 0) return -1;
+    flat = calloc((size_t)n, len);
     if (!flat) { note_oom(); return -1; }
     for (i = 0; i < n; i++) snprintf(flat + (size_t)i * len, len, "%s", v[i]);
     t = str_type(len);
