@@ -69,7 +69,8 @@ void cd_rosw_invalidate(cd_rosw *w);
  * the evaluation fails. Uses the stage buffers (between steps only). */
 double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y);
 
-/* For the Gauss stepper (gauss4.c), which uses this workspace's Jacobian:
+/* For the Gauss (gauss4.c) and BDF (bdf.c) steppers, which use this
+ * workspace's Jacobian:
  * the active set's capacity; the Jacobian of a ros34pw2 step (no df/dt:
  * simulation.jacobian's structured one, reduce()d, or the forward difference
  * on the active set; plain: the system's own or forward differences) formed
