@@ -338,6 +338,16 @@ static double trial_force(const cd_contact_law *L, const double RB[9], const dou
     return nf;
 }
 
+/* 1: a build-time trial (docs/performance.md section 13), not the model: a
+ * slipping no-pull contact keeps its friction law, mu_k f_n, for f_n < 0,
+ * a smooth extension past the separation guard (min(K x, f_raw) = 0) that
+ * only trial stages beyond the located separation can see, instead of
+ * dropping the friction (and the bristle's cone) to zero there:
+ * make BUILD=build-trial EXTRA_CFLAGS=-DCD_CONTACT_SLIP_SMOOTH=1 build-trial/bench_scenarios */
+#ifndef CD_CONTACT_SLIP_SMOOTH
+#define CD_CONTACT_SLIP_SMOOTH 0
+#endif
+
 /* The saturated bristle of a slipping slot (D_t > 0): its force
  * K_t z_t^pt + D_t zdot^qt equals mu_k f_n s (s the slip direction, unit,
  * tangential), which gives the deflection's rate zdot (world) and the
@@ -345,7 +355,7 @@ static double trial_force(const cd_contact_law *L, const double RB[9], const dou
 static void bristle_va(const cd_contact_law *L, const double RB[9], const double z[3], const double n[3],
                        const double vt[3], double fn, const double s[3], double va[3], double zd_out[3])
 {
-    double zw[3], zt[3], fk[3], w[3], zd[3], nw, fc = fn > 0 ? fn : 0.0;
+    double zw[3], zt[3], fk[3], w[3], zd[3], nw, fc = fn > 0 || (CD_CONTACT_SLIP_SMOOTH && !L->pull) ? fn : 0.0;
     cd_m3_mulv(zw, RB, z);
     tangential(zt, zw, n);
     vpow(fk, zt, L->Kt, L->pt);
@@ -458,7 +468,7 @@ static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot)
             cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
             nu = cd_v3_norm(u);
             /* eq. (5): Coulomb, against the slip; none while a `pull` contact is in tension */
-            if (nu > 0 && fn > 0) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
+            if (nu > 0 && (fn > 0 || (CD_CONTACT_SLIP_SMOOTH && !L->pull))) cd_v3_scale(ft, u, -L->mu_k * fn / nu);
         }
     }
     if (d->slot_held[k] && mode != CD_MODE_OPEN) {
