@@ -288,8 +288,9 @@ static int stored_step_peaks(const cd_h5r *r, cli_run_extra *fx, double **buf, c
 static void report_initial_overlap(FILE *out, const cd_h5r *r)
 {
     cd_error err;
-    double *x = r->n > 0 ? cd_h5r_series(r, "/contacts/penetration", NULL, &err) : NULL;
-    double *t = x ? cd_h5r_series(r, "/time", NULL, &err) : NULL;
+    /* the first sample alone: its row of each series */
+    double *x = r->n > 0 ? cd_h5r_series_head(r, "/contacts/penetration", 1, NULL, &err) : NULL;
+    double *t = x ? cd_h5r_series_head(r, "/time", 1, NULL, &err) : NULL;
     int k, n = 0, kmax = -1;
     char lab[512], line[1024];
     if (!x) return;

@@ -636,6 +636,11 @@ static int expected_shape(const cd_h5r *r, const char *path, int *rank, hsize_t 
 
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err)
 {
+    return cd_h5r_series_head(r, path, r->n, rowlen, err);
+}
+
+double *cd_h5r_series_head(const cd_h5r *r, const char *path, long nrows, size_t *rowlen, cd_error *err)
+{
     cd_h5_quiet q;
     hid_t ds, fs, ms, ft;
     hsize_t d[3] = {0, 0, 0}, off[3] = {0, 0, 0}, cnt[3], tail[2] = {0, 0};
@@ -678,11 +683,12 @@ double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_erro
         seterr(err, CD_EIO, "dataset %s is shorter than the committed sample count", path);
         return NULL;
     }
+    if (nrows < 0 || nrows > r->n) nrows = r->n;
     for (i = 1; i < rank; i++) rl *= (size_t)d[i];
-    cnt[0] = (hsize_t)r->n;
+    cnt[0] = (hsize_t)nrows;
     for (i = 1; i < rank; i++) cnt[i] = d[i];
-    v = malloc(((size_t)r->n * rl > 0 ? (size_t)r->n * rl : 1) * sizeof *v);
-    if (v && r->n > 0 && rl > 0) {
+    v = malloc(((size_t)nrows * rl > 0 ? (size_t)nrows * rl : 1) * sizeof *v);
+    if (v && nrows > 0 && rl > 0) {
         H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL);
         ms = H5Screate_simple(rank, cnt, NULL);
         if (H5Dread(ds, H5T_NATIVE_DOUBLE, ms, fs, H5P_DEFAULT, v) < 0) {

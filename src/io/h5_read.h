@@ -76,6 +76,10 @@ int cd_h5r_exists(const cd_h5r *r, const char *path);
  * if missing, or if its shape or type is not what the schema
  * (src/io/h5_schema.h) and the model tables say. */
 double *cd_h5r_series(const cd_h5r *r, const char *path, size_t *rowlen, cd_error *err);
+/* The same, its first min(nrows, r->n) rows only (nrows < 0: all committed):
+ * for a reader that needs a row or two, without reading (and inflating)
+ * the whole series. */
+double *cd_h5r_series_head(const cd_h5r *r, const char *path, long nrows, size_t *rowlen, cd_error *err);
 /* A one-dimensional dataset of n elements (e.g. the (nslot) peaks over
  * steps, h5_schema.h) as doubles into v: 0; -1 if it does not exist; -2 if
  * its shape is not (n) or it does not read. */
