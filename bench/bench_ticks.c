@@ -115,22 +115,22 @@ static void report(const char *loop, const char *stepper, double period, ticks *
     (void)period;
 }
 
-/* one tick's bookkeeping around the work done between w0/c0/n0/a0 and now */
+/* one tick's bookkeeping around the work done between w0/c0/a0/s0 and now */
 static FILE *tick_file; /* --ticks FILE: one row per tick */
-static void tick_done(ticks *t, double period, double w0, double c0, long n0, long a0, const cd_data *d,
+static void tick_done(ticks *t, double period, double w0, double c0, long a0, const cd_data *d,
                       const char *loop, const char *stepper, const cd_stats *s0)
 {
     double w = clock_s(CLOCK_MONOTONIC) - w0, c = clock_s(CLOCK_THREAD_CPUTIME_ID) - c0;
     long a = nalloc - a0;
     if (tick_file)
         fprintf(tick_file, "%s %s %ld %.4f %.4f %.4f %ld %ld %ld %ld %ld %ld %d\n", loop,
-                stepper, t->n, d->t, 1e3 * w, 1e3 * c, d->stats.nrhs - n0,
+                stepper, t->n, d->t, 1e3 * w, 1e3 * c, d->stats.nrhs - s0->nrhs,
                 d->stats.nsteps - s0->nsteps, d->stats.nrejected - s0->nrejected, d->stats.nevents - s0->nevents,
                 d->stats.nlocate_interp - s0->nlocate_interp, d->stats.nlocate_steps - s0->nlocate_steps,
                 d->stats.t_stiff > s0->t_stiff);
     t->wall[t->n] = w;
     t->cpu[t->n] = c;
-    t->evals[t->n] = (double)(d->stats.nrhs - n0);
+    t->evals[t->n] = (double)(d->stats.nrhs - s0->nrhs);
     if (w > period) t->over++;
     if (a > t->alloc_max) t->alloc_max = a;
     t->alloc_total += a;
@@ -163,14 +163,14 @@ static void loop_example(cd_stepper stepper)
     if (!d) { say("example  %-9s data: %s\n", cd_stepper_name(stepper), err.msg); ticks_free(&t); cd_model_free(m); return; }
     for (k = 0; k < n_ticks; k++) {
         double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
-        long n0 = d->stats.nrhs, a0 = nalloc;
+        long a0 = nalloc;
         cd_stats s0 = d->stats;
         counting = 1;
         if (control_tick(m, d, &ctl, &ids) != 0) { counting = 0; st = CD_ENUMERIC; snprintf(err.msg, sizeof err.msg, "controller"); break; }
         st = cd_step(m, d, h, &err);
         counting = 0;
         if (st != CD_OK) break;
-        tick_done(&t, h, w0, c0, n0, a0, d, "example", cd_stepper_name(stepper), &s0);
+        tick_done(&t, h, w0, c0, a0, d, "example", cd_stepper_name(stepper), &s0);
     }
     report("example", cd_stepper_name(stepper), h, &t, d, st, st == CD_OK ? "" : err.msg);
     ticks_free(&t);
@@ -215,13 +215,13 @@ static void loop_capture(cd_stepper stepper)
     }
     for (k = 0; k < n_ticks; k++) {
         double w0 = clock_s(CLOCK_MONOTONIC), c0 = clock_s(CLOCK_THREAD_CPUTIME_ID);
-        long n0 = d->stats.nrhs, a0 = nalloc;
+        long a0 = nalloc;
         cd_stats s0 = d->stats;
         counting = 1;
         st = cd_sim_advance(sc->model, d, (double)(k + 1) * period, NULL, NULL, &err);
         counting = 0;
         if (st != CD_OK) break;
-        tick_done(&t, period, w0, c0, n0, a0, d, "capture", cd_stepper_name(stepper), &s0);
+        tick_done(&t, period, w0, c0, a0, d, "capture", cd_stepper_name(stepper), &s0);
     }
     report("capture", cd_stepper_name(stepper), period, &t, d, st, st == CD_OK ? "" : err.msg);
     ticks_free(&t);
