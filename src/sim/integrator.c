@@ -95,6 +95,9 @@ typedef struct {
     double *k1, *k2, *k3, *k4, *ytmp; /* classic RK4 (fixed-step mode) */
     double *f0s, *f1s;        /* f at the start and the end of the step an event is located in (the Hermite cubic) */
     double *f0chk;            /* f(t0, y0) of the step being taken (the divergence check) */
+    double *g_end, *g_cur;    /* every unit's two switching functions (gmin's gv): at the step's end, at a trial */
+    double *g_lo, *g_hi;      /* ... at the ends of the locator's bracket (the integrator's own solution) */
+    double *g_ilo, *g_ihi;    /* ... at the ends of the bracket on the interpolant */
     double *ylast, tlast;     /* the state of rhs's last evaluation (d's outputs are those of it) */
     int last_valid;           /* ylast/tlast describe d's outputs (no direct cd_forward since) */
     double *in_snap;          /* inputs at the end of the last call */
@@ -123,6 +126,8 @@ typedef struct {
     int autom;                /* stepper is CD_STEP_AUTO */
     int stiff;                /* auto: the stiff stepper is the current one */
     int auto_hits;            /* consecutive checks that asked for the other stepper */
+    double loc_rho, loc_h;    /* rk4imp, msbdf: the spectral radius at the start of the step an event is
+                                 located in (0: none), and that step's length */
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled while the switches come fast) */
     long auto_since;          /* accepted steps since the last switch */
@@ -175,9 +180,9 @@ static int uses_rosw(cd_stepper s)
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
-    /* the struct, then 14 n + nin doubles (14 buffers of n), then the ros34pw2
+    /* the struct, then 14 n + 12 nsw + nin doubles (14 buffers of n, 6 of 2 nsw), then the ros34pw2
      * buffers (also the Jacobian of rk4imp and msbdf), then rk4imp's or msbdf's own */
-    return sizeof(cd_integ) + 16 + (14 * n + nin + 1) * sizeof(double) +
+    return sizeof(cd_integ) + 16 + (14 * n + nin + 12 * (size_t)m->nsw + 1) * sizeof(double) +
            (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
            (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
            (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
@@ -195,6 +200,9 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
     I->k1 = p; p += n; I->k2 = p; p += n;
     I->k3 = p; p += n; I->k4 = p; p += n; I->ytmp = p; p += n; I->y_end = p; p += n;
     I->f0s = p; p += n; I->f1s = p; p += n; I->ylast = p; p += n; I->f0chk = p; p += n;
+    I->g_end = p; p += 2 * m->nsw; I->g_cur = p; p += 2 * m->nsw;
+    I->g_lo = p; p += 2 * m->nsw; I->g_hi = p; p += 2 * m->nsw;
+    I->g_ilo = p; p += 2 * m->nsw; I->g_ihi = p; p += 2 * m->nsw;
     I->in_snap = p;
     p += nin;
     I->nin = (int)nin;
@@ -336,12 +344,14 @@ static int in_dwell(const cd_data *d, int u)
 
 /* min over watched units of the switching functions at d's current state
  * (after cd_forward); the unit achieving it in *which. */
-static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *which)
+static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *which, double *gv)
 {
     int u;
     double best = HUGE_VAL, g[2];
     if (which) *which = -1;
     for (u = 0; u < m->nsw; u++) {
+        /* gv: every unit's two functions (+inf for a unit left out: never crossing) */
+        if (gv) gv[2 * u] = gv[2 * u + 1] = HUGE_VAL;
         if (use_dwell && in_dwell(d, u)) continue;
         if (cd_sw_skip(m, d, u)) continue;
         if (u < m->nslot) {
@@ -349,6 +359,7 @@ static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *whic
         } else {
             cd_sw_functions(m, d, u, 0, g);
         }
+        if (gv) { gv[2 * u] = g[0]; gv[2 * u + 1] = g[1]; }
         if (g[0] < best) { best = g[0]; if (which) *which = u; }
         if (g[1] < best) { best = g[1]; if (which) *which = u; }
     }
@@ -482,12 +493,30 @@ static int one_step(cd_integ *I, double t, double h, double *y)
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
+/* rk4imp and msbdf locate with rk8pd steps across their own (implicit)
+ * step, which may be far beyond rk8pd's stability limit on a stiff
+ * problem: a trial of length tau is then taken in n equal rk8pd steps with
+ * n rho tau/n within rk8pd's real stability interval (CD_AUTO_STIFF, about
+ * half of it), rho the spectral radius at the step's start. Without it a
+ * trial could land far off the solution, where a switching function is
+ * negative for no physical reason: msbdf on the Fig. 5 grasp landed on a
+ * stick-slip pair 15 ns long on a contact 0.32 N inside its cone. */
+#define CD_LOC_MAX_SUB 256
+static int loc_substeps(const cd_integ *I, double tau)
+{
+    double n = I->loc_rho > 0 ? ceil(tau * I->loc_rho / CD_AUTO_STIFF) : 1.0;
+    return n < 1.0 ? 1 : n > CD_LOC_MAX_SUB ? CD_LOC_MAX_SUB : (int)n;
+}
+
 /* One locator step of length tau from (t0, y0) into y; then cd_forward. */
 static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, double *y)
 {
-    int st;
+    int st = GSL_SUCCESS, k, n = loc_substeps(I, tau);
     memcpy(y, I->y0, (size_t)m->ny * sizeof(double));
-    st = one_step(I, t0, tau, y);
+    for (k = 0; k < n && st == GSL_SUCCESS; k++) {
+        double a = tau * k / n, b = k == n - 1 ? tau : tau * (k + 1) / n;
+        st = one_step(I, t0 + a, b - a, y);
+    }
     d->stats.nlocate_steps++;
     if (st != GSL_SUCCESS) return CD_ENUMERIC;
     d->y = y;
@@ -512,6 +541,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 /* evaluations one more locator iteration costs (its stages and the forward) */
 static long trial_cost(const cd_integ *I)
 {
+    if (I->loc_rho > 0) return 14 * (long)loc_substeps(I, I->loc_h);
     return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
 }
 
@@ -539,32 +569,103 @@ static cd_status interp(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     return st == CD_OK ? CD_OK : CD_ENUMERIC;
 }
 
-/* Illinois (modified regula falsi) on the bracket [lo, hi] of g, on the
- * interpolant (use_interp) or on locator steps from y0. Leaves the last
- * real state of the upper end in I->yhi when !use_interp. */
-static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0, double h, int use_interp,
-                          double *lo, double *hi, double *glo, double *ghi)
+/* A bracket [lo, hi] (times from the step's start) of the first crossing:
+ * gmin at its ends, and every unit's two functions there (gmin's gv). */
+typedef struct {
+    double lo, hi, glo, ghi;
+    double *gl, *gh;
+} cd_bracket;
+
+/* Where in [0, 1] of the bracket the first unit crosses, by the secant of
+ * each function that is negative at hi between its values at the two ends
+ * (weighted by al, ah: Illinois), the earliest of them. The secant of gmin
+ * itself is a poor guess when gmin is the minimum of several functions:
+ * one unit's function at lo and another's, steeper, at hi (soft_wrap's
+ * first events: gmin 4e-4 at lo and -0.44 at hi, the secant creeping from
+ * lo); each unit's own secant is the guess of SUNDIALS' rootfinding. A unit
+ * without a value at lo (left out there: an open slot apart by more than
+ * its radius, or in a guard window) gives the middle. */
+static double earliest(const cd_model *m, const cd_bracket *b, double al, double ah)
 {
-    int side = 0, it;
+    double best = HUGE_VAL;
+    int i, n = 2 * m->nsw;
+    for (i = 0; i < n; i++) {
+        double a, f;
+        if (!(b->gh[i] < 0)) continue;
+        if (!(b->gl[i] < HUGE_VAL)) f = 0.5;
+        else {
+            a = b->gl[i] > 0 ? al * b->gl[i] : 0.0;
+            f = a / (a - ah * b->gh[i]);
+        }
+        if (f < best) best = f;
+    }
+    return best <= 1.0 ? best : 0.5;
+}
+
+/* An end of the bracket moves to tau, where gmin is g and every unit's
+ * functions are in I->g_cur: side +1 (lo, old side) or -1 (hi, new side). */
+static void bracket_move(const cd_model *m, const cd_integ *I, cd_bracket *b, double tau, double g)
+{
+    if (g < 0) {
+        b->hi = tau; b->ghi = g;
+        memcpy(b->gh, I->g_cur, (size_t)(2 * m->nsw) * sizeof(double));
+    } else {
+        b->lo = tau; b->glo = g;
+        memcpy(b->gl, I->g_cur, (size_t)(2 * m->nsw) * sizeof(double));
+    }
+}
+
+/* Illinois (modified regula falsi) on the bracket b, on the interpolant
+ * (use_interp) or on locator steps from y0. Leaves the last real state of
+ * the upper end in I->yhi when !use_interp. */
+static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0, double h, int use_interp,
+                          cd_bracket *b)
+{
+    int side = 0, it, edge = 0, edge_missed = 0;
+    /* tol_in: an edge trial a hair inside the tolerance, so that the
+     * bracket it closes is not a rounding above it (one more iteration) */
+    const double tol = d->opt.event_tol, tol_in = tol * (1.0 - 1e-6);
+    double al = 1.0, ah = 1.0;
     cd_status st;
-    for (it = 0; it < 200 && *hi - *lo > d->opt.event_tol; it++) {
-        double tau, g, w = *hi - *lo;
+    for (it = 0; it < 200 && b->hi - b->lo > tol; it++) {
+        double tau, g, w = b->hi - b->lo;
         if (!budget_left(d, I, use_interp ? 1 : trial_cost(I))) { d->stats.nwarn_budget++; break; }
-        /* Illinois: secant on the bracket, the stale end's value halved */
-        tau = (*glo - *ghi) != 0 ? *lo + *glo * w / (*glo - *ghi) : *lo + 0.5 * w;
-        if (!(tau > *lo + 0.01 * w && tau < *hi - 0.01 * w)) tau = *lo + 0.5 * w;
-        if (it % 4 == 3) tau = *lo + 0.5 * w; /* a bisection now and then bounds the worst case */
+        /* Illinois: the secant of each crossing unit, the stale end's values halved */
+        tau = b->lo + earliest(m, b, al, ah) * w;
+        if (!(tau > b->lo && tau < b->hi)) tau = b->lo + 0.5 * w;
+        edge = 0;
+        if (it % 4 == 3 || w <= 2.0 * tol) {
+            tau = b->lo + 0.5 * w; /* a bisection now and then bounds the worst case */
+        } else if (edge_missed) {
+            /* the last edge trial found the crossing farther: a tenth of
+             * the bracket from that end (SUNDIALS' rootfinding rule) */
+            tau = edge_missed > 0 ? b->lo + 0.1 * w : b->hi - 0.1 * w;
+        } else if (tau - b->lo < 0.5 * tol) {
+            /* the estimate within half a tolerance of an end: a trial one
+             * tolerance from it closes the bracket if the estimate holds
+             * (a bisection here, as the old rule made it, halves the
+             * bracket per iteration: ~16 iterations per event from a step
+             * of 1e-5 s) */
+            tau = b->lo + tol_in;
+            edge = 1;
+        } else if (b->hi - tau < 0.5 * tol) {
+            tau = b->hi - tol_in;
+            edge = -1;
+        }
+        edge_missed = 0;
         st = use_interp ? interp(m, d, I, t0, h, tau, I->ylo) : trial(m, d, I, t0, tau, I->ylo);
         if (st != CD_OK) return st;
-        g = gmin(m, d, 1, NULL);
+        g = gmin(m, d, 1, NULL, I->g_cur);
+        if (edge) edge_missed = (g < 0) == (edge > 0) ? 0 : edge;
+        bracket_move(m, I, b, tau, g);
         if (g < 0) {
-            *hi = tau; *ghi = g;
             if (!use_interp) memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
-            if (side == -1) *glo *= 0.5;
+            if (side == -1) al *= 0.5;
+            ah = 1.0;
             side = -1;
         } else {
-            *lo = tau; *glo = g;
-            if (side == 1) *ghi *= 0.5;
+            if (side == 1) ah *= 0.5;
+            al = 1.0;
             side = 1;
         }
     }
@@ -593,33 +694,28 @@ static int implicit_with_explicit_locator(const cd_integ *I)
 /* One locator step to t0 + tau, and the bracket end it certifies: the new
  * side (g < 0: *newside = 1) moves hi, its state kept in I->yhi; the old
  * side moves lo. */
-static cd_status bracket_at(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, double *lo,
-                            double *hi, double *glo, double *ghi, int *newside)
+static cd_status bracket_at(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, cd_bracket *b,
+                            int *newside)
 {
     double g;
     cd_status st = trial(m, d, I, t0, tau, I->ylo);
     if (st != CD_OK) return st;
-    g = gmin(m, d, 1, NULL);
+    g = gmin(m, d, 1, NULL, I->g_cur);
     *newside = g < 0;
-    if (*newside) {
-        *hi = tau; *ghi = g;
-        memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
-    } else {
-        *lo = tau; *glo = g;
-    }
+    bracket_move(m, I, b, tau, g);
+    if (*newside) memcpy(I->yhi, I->ylo, (size_t)m->ny * sizeof(double));
     return CD_OK;
 }
 
-static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, int side, double s, double *lo,
-                       double *hi, double *glo, double *ghi)
+static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, int side, double s, cd_bracket *b)
 {
-    double dist = side > 0 ? *glo / -s : *ghi / s;
+    double dist = side > 0 ? b->glo / -s : b->ghi / s;
     int k, newside;
-    for (k = 0; k < 3 && *hi - *lo > d->opt.event_tol; k++, dist *= 4.0) {
-        double tp = side > 0 ? *lo + 1.5 * dist + d->opt.event_tol : *hi - 1.5 * dist - d->opt.event_tol;
+    for (k = 0; k < 3 && b->hi - b->lo > d->opt.event_tol; k++, dist *= 4.0) {
+        double tp = side > 0 ? b->lo + 1.5 * dist + d->opt.event_tol : b->hi - 1.5 * dist - d->opt.event_tol;
         cd_status st;
-        if (!(tp > *lo && tp < *hi) || !budget_left(d, I, trial_cost(I))) break;
-        st = bracket_at(m, d, I, t0, tp, lo, hi, glo, ghi, &newside);
+        if (!(tp > b->lo && tp < b->hi) || !budget_left(d, I, trial_cost(I))) break;
+        st = bracket_at(m, d, I, t0, tp, b, &newside);
         if (st != CD_OK) return st;
         if (newside == (side > 0)) break; /* past the crossing: bracketed */
     }
@@ -628,6 +724,7 @@ static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, in
 
 /* Locate the first zero of gmin in (t0, t1] given gmin(t0) >= 0 > gmin(t1),
  * and leave d at the upper end of the final bracket (on the new side).
+ * Every unit's functions at t1 are in I->g_end.
  *
  * Adaptive steppers first narrow the bracket on the step's cubic Hermite
  * interpolant (one evaluation per iteration), then certify it with two
@@ -637,11 +734,37 @@ static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, in
  * crossing), the Illinois iterations go on with locator steps from the
  * bracket that is certified. So the located state is always the
  * integrator's own solution, the bracket at most event_tol wide. */
+static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
+                           int *trigger);
 static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
                         int *trigger)
 {
-    double h = t1 - t0, lo = 0.0, hi = h, glo, ghi = g_hi, *ystate = d->y;
     cd_status st;
+    I->loc_rho = 0.0;
+    if (!I->fixed && implicit_with_explicit_locator(I)) {
+        /* the end state and its derivative first: the estimate may evaluate */
+        memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
+        memcpy(I->f1s, d->ydot, (size_t)m->ny * sizeof(double));
+        I->loc_rho = cd_rosw_spectral_radius(&I->rw, t0, I->y0);
+        I->loc_h = t1 - t0;
+        if (!(I->loc_rho > 0)) I->loc_rho = 0.0;
+        memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
+        memcpy(d->ydot, I->f1s, (size_t)m->ny * sizeof(double));
+    }
+    st = locate_in(m, d, I, t0, t1, g_hi, trigger);
+    I->loc_rho = 0.0;
+    return st;
+}
+
+static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
+                           int *trigger)
+{
+    double h = t1 - t0, *ystate = d->y;
+    cd_bracket b;
+    cd_status st;
+    const size_t ng = (size_t)(2 * m->nsw) * sizeof(double);
+    b.lo = 0.0; b.hi = h; b.ghi = g_hi; b.gl = I->g_lo; b.gh = I->g_hi;
+    memcpy(b.gh, I->g_end, ng);
     /* the end of the step and its derivative (d was evaluated there) */
     memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
     memcpy(I->f1s, d->ydot, (size_t)m->ny * sizeof(double));
@@ -652,40 +775,43 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
     d->stats.nrhs++;
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     memcpy(I->f0s, d->ydot, (size_t)m->ny * sizeof(double));
-    glo = gmin(m, d, 1, NULL);
-    if (!(glo > 0)) glo = 0.0;
+    b.glo = gmin(m, d, 1, NULL, b.gl);
+    if (!(b.glo > 0)) b.glo = 0.0;
     if (!I->fixed) {
-        double ilo = lo, ihi = hi, iglo = glo, ighi = ghi;
-        st = illinois(m, d, I, t0, h, 1, &ilo, &ihi, &iglo, &ighi);
+        cd_bracket ib = b;
+        ib.gl = I->g_ilo; ib.gh = I->g_ihi;
+        memcpy(ib.gl, b.gl, ng);
+        memcpy(ib.gh, b.gh, ng);
+        st = illinois(m, d, I, t0, h, 1, &ib);
         if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
         int failed = 0, newside; /* a certification that failed: +1 the upper end, -1 the lower */
         /* certify the upper end with the integrator's own step */
-        if (ihi < hi && budget_left(d, I, trial_cost(I))) {
-            st = bracket_at(m, d, I, t0, ihi, &lo, &hi, &glo, &ghi, &newside);
+        if (ib.hi < b.hi && budget_left(d, I, trial_cost(I))) {
+            st = bracket_at(m, d, I, t0, ib.hi, &b, &newside);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
             if (!newside) failed = 1;
         }
         /* and the lower end, if the upper one held */
-        if (hi == ihi && ilo > lo && budget_left(d, I, trial_cost(I))) {
-            st = bracket_at(m, d, I, t0, ilo, &lo, &hi, &glo, &ghi, &newside);
+        if (b.hi == ib.hi && ib.lo > b.lo && budget_left(d, I, trial_cost(I))) {
+            st = bracket_at(m, d, I, t0, ib.lo, &b, &newside);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
             if (newside) failed = -1;
         }
-        if (failed && ihi > ilo && ighi - iglo < 0 && !implicit_with_explicit_locator(I)) {
-            st = probe(m, d, I, t0, failed, (ighi - iglo) / (ihi - ilo), &lo, &hi, &glo, &ghi);
+        if (failed && ib.hi > ib.lo && ib.ghi - ib.glo < 0 && !implicit_with_explicit_locator(I)) {
+            st = probe(m, d, I, t0, failed, (ib.ghi - ib.glo) / (ib.hi - ib.lo), &b);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
         }
     }
-    st = illinois(m, d, I, t0, h, 0, &lo, &hi, &glo, &ghi);
+    st = illinois(m, d, I, t0, h, 0, &b);
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
     /* land at the upper end (exactly at the step's end if the bracket never moved) */
     d->y = ystate;
     memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
-    d->t = hi == h ? t1 : t0 + hi;
+    d->t = b.hi == h ? t1 : t0 + b.hi;
     st = cd_forward(m, d);
     d->stats.nrhs++;
     if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
-    (void)gmin(m, d, 1, trigger);
+    (void)gmin(m, d, 1, trigger, NULL);
     return CD_OK;
 }
 
@@ -1061,7 +1187,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             return CD_ENUMERIC;
         }
         I->fsal = 1;
-        g1 = gmin(m, d, 1, NULL);
+        g1 = gmin(m, d, 1, NULL, I->g_end);
         if (at_dwell_end && d->t == t1) need_settle = 1;
         if (at_break && d->t == t1) hit_break = 1;
         if (g1 < 0) {
