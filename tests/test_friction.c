@@ -534,3 +534,124 @@ Test(friction, a_held_slot_keeps_no_pull_and_the_cone)
     cd_data_free(r.d);
     cd_model_free(r.m);
 }
+
+/* A point (mass, no gravity) at pos with velocity vel over the fixed plane
+ * z = 0, in contact through law; finalized (finalize()). *ball is its system. */
+static cd_model *point_over_plane(const cd_contact_law *law, double mass, const double pos[3], const double vel[3],
+                                  int *ball)
+{
+    cd_model *m = cd_model_create();
+    cd_error e;
+    int ground, plane, lid;
+    m->gravity[0] = m->gravity[1] = m->gravity[2] = 0;
+    ground = add_system(m, "ground", CD_BASE_FIXED, 1.0, 1.0, NULL, NULL, NULL);
+    plane = add_plane(m, m->sys_body_adr[ground]);
+    *ball = add_system(m, "ball", CD_BASE_FREE, mass, 1.0, pos, vel, NULL);
+    add_point(m, m->sys_body_adr[*ball]);
+    lid = cd_model_add_law(m, law, &e);
+    cr_assert(lid >= 0, "%s", e.msg);
+    cr_assert(cd_model_add_pair(m, *ball, -1, plane, lid, &e) >= 0, "%s", e.msg);
+    finalize(m);
+    return m;
+}
+
+Test(friction, slipping_contact_separates_on_time_with_the_coulomb_impulse)
+{
+    /* A point (1 kg) hits a plane at 1 m/s normal and 2 m/s tangential
+     * speed, no gravity, K = 1e5 N/m, zeta = 0.2 (D = 2 zeta sqrt(K m)),
+     * mu = 0.3: the slot goes open -> stick -> slip at onset and slides
+     * until the linear damper's force reaches 0 (no pull). The normal motion
+     * is the damped oscillator x = v0/wd e^(-zeta w t) sin(wd t), so
+     * f_raw = K x + D xdot = 0 at wd t = pi - atan(2 zeta sqrt(1 - zeta^2)
+     * / (1 - 2 zeta^2)); the friction -mu f_n throughout takes mu J / m off
+     * the tangential speed, J = m (v0 - xdot(t_sep)) the normal impulse.
+     * Between events the slip law is continued past f_n = 0 (docs/contact.md,
+     * and the next test): the located separation and the impulse must not
+     * see that continuation. */
+    const double mass = 1.0, K = 1e5, zeta = 0.2, mu = 0.3, v0 = 1.0, vt0 = 2.0;
+    const double w = sqrt(K / mass), wd = w * sqrt(1.0 - zeta * zeta);
+    const double ts = (M_PI - atan(2.0 * zeta * sqrt(1.0 - zeta * zeta) / (1.0 - 2.0 * zeta * zeta))) / wd;
+    const double xd_sep = v0 * exp(-zeta * w * ts) * (cos(wd * ts) - zeta * w / wd * sin(wd * ts));
+    const double vt_out = vt0 - mu * (v0 - xd_sep);
+    cd_data *d;
+    cd_error e;
+    double pos[3] = {0, 0, 0.01}, vel[3] = {vt0, 0, -v0};
+    int ball, sep = -1;
+    long i;
+    cd_contact_law law = law_for(mass, K, K, mu, mu);
+    cd_model *m;
+    law.D = 2.0 * zeta * sqrt(K * mass);
+    m = point_over_plane(&law, mass, pos, vel, &ball);
+    m->opt.rtol = 1e-10;
+    m->opt.atol = 1e-12;
+    d = cd_data_create(m, 0, &e);
+    cr_assert(d, "%s", e.msg);
+    cr_assert_eq(cd_sim_advance(m, d, 0.012 + ts, NULL, NULL, &e), CD_OK, "%s", e.msg);
+    for (i = 0; i < d->ev_count; i++)
+        if (cd_data_event(d, i)->kind == CD_EV_SEPARATION) sep = (int)i;
+    cr_assert_geq(sep, 2, "onset, stick -> slip, then the separation");
+    cr_expect_eq(cd_data_event(d, sep - 1)->kind, CD_EV_STICK_SLIP, "it slid until it left");
+    {
+        cd_sys_state st = cd_state_of(m, d, ball);
+        double tsep = cd_data_event(d, sep)->t - cd_data_event(d, 0)->t;
+        cr_log_info("separation %.15g s after onset (closed form %.15g s, off by %.2e s); tangential speed %.15g m/s "
+                    "(closed form %.15g); %ld steps, %ld rejected, %ld events",
+                    tsep, ts, tsep - ts, st.vel[0], vt_out, d->stats.nsteps, d->stats.nrejected, d->ev_count);
+        cr_expect_lt(fabs(tsep - ts), 2e-10, "separation %.15g s after onset, closed form %.15g s", tsep, ts);
+        cr_expect_lt(fabs(st.vel[0] - vt_out), 1e-8, "tangential speed %.15g m/s, closed form %.15g m/s", st.vel[0],
+                     vt_out);
+        cr_expect_lt(fabs(st.vel[2] + xd_sep), 1e-8, "normal speed %.15g m/s, closed form %.15g m/s", st.vel[2],
+                     -xd_sep);
+    }
+    cd_data_free(d);
+    cd_model_free(m);
+}
+
+Test(friction, slip_law_is_continued_smoothly_past_the_separation_guard)
+{
+    /* The state of the test above in slip, its penetration x = 1 mm held and
+     * its rate xdot swept so that f_raw = K x + D xdot runs from +20 N to -20 N
+     * (the separation guard is f_raw = 0): the friction is -mu f_raw along the
+     * slip on both sides, one straight line through the guard, so a trial
+     * stage past a separation not yet located sees no kink (the law that
+     * dropped the friction to 0 at f_raw = 0 had one there, and cascaded
+     * rejected steps before soft_wrap's separations, docs/performance.md
+     * section 14). A `pull` contact keeps no friction while f_n < 0. */
+    const double mass = 1.0, K = 1e5, zeta = 0.2, mu = 0.3, x = 1e-3;
+    int pull;
+    for (pull = 0; pull < 2; pull++) {
+        cd_data *d;
+        cd_error e;
+        int ball, i;
+        const double zero[3] = {0, 0, 0};
+        cd_contact_law law = law_for(mass, K, K, mu, mu);
+        cd_model *m;
+        law.D = 2.0 * zeta * sqrt(K * mass);
+        law.pull = pull;
+        m = point_over_plane(&law, mass, zero, zero, &ball);
+        d = cd_data_create(m, 0, &e);
+        cr_assert(d, "%s", e.msg);
+        d->slot_mode[0] = CD_MODE_SLIP;
+        d->slot_dir[0] = 1.0;
+        d->slot_dir[1] = d->slot_dir[2] = 0.0;
+        for (i = -20; i <= 20; i++) {
+            double f_target = (double)i, xdot = (f_target - K * x) / law.D, ftx;
+            cd_sys_state st = cd_state_of(m, d, ball);
+            st.pos[2] = -x;    /* the solid is z <= 0 */
+            st.vel[0] = 2.0;   /* sliding along +x */
+            st.vel[2] = -xdot; /* xdot = -v.n */
+            cr_assert_eq(cd_forward(m, d), CD_OK);
+            cr_assert_lt(fabs(d->slot_fnraw[0] - f_target), 1e-9, "f_raw %.17g N, set %g N", d->slot_fnraw[0], f_target);
+            ftx = d->slot_ft[0];
+            if (!pull || f_target > 0)
+                cr_expect_lt(fabs(ftx + mu * d->slot_fnraw[0]), 1e-12 * (1.0 + fabs(d->slot_fnraw[0])),
+                             "pull %d, f_raw %g N: friction %.17g N, -mu f_raw %.17g N", pull, f_target, ftx,
+                             -mu * d->slot_fnraw[0]);
+            else
+                cr_expect_eq(ftx, 0.0, "a pulling contact holds no friction: %.17g N at f_raw %g N", ftx, f_target);
+            cr_expect_eq(d->slot_ft[1], 0.0);
+        }
+        cd_data_free(d);
+        cd_model_free(m);
+    }
+}
