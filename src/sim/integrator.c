@@ -707,6 +707,33 @@ static cd_status bracket_at(const cd_model *m, cd_data *d, cd_integ *I, double t
     return CD_OK;
 }
 
+/* The lower end of a bracket at most event_tol wide, certified without a
+ * locator step: the upper end's own state (I->yhi, at b->hi, its derivative
+ * fhi) taken back to tau along fhi, y(tau) ~ y(hi) - (hi - tau) fhi. The
+ * locator's solution from t0 is smooth in its step length, so this differs
+ * from a locator step to tau by O(dt^2 |y''|) with dt <= event_tol (1e-10 s:
+ * ~1e-20 |y''|), far below the state's round-off: the old side there is the
+ * old side of the locator's own solution. Moves b->lo if the state shows the
+ * old side (one evaluation instead of a locator step's 13); otherwise the
+ * caller takes the locator step (this state is never landed on). */
+static cd_status lower_end_back(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau,
+                                const double *fhi, cd_bracket *b)
+{
+    double g, dt = b->hi - tau;
+    int i;
+    cd_status st;
+    for (i = 0; i < m->ny; i++) I->ylo[i] = I->yhi[i] - dt * fhi[i];
+    d->y = I->ylo;
+    d->t = t0 + tau;
+    if (m->npresc) cd_prescribed_apply(m, d->t, I->ylo);
+    st = cd_forward(m, d);
+    d->stats.nrhs++;
+    if (st != CD_OK) return CD_ENUMERIC;
+    g = gmin(m, d, 1, NULL, I->g_cur);
+    if (!(g < 0)) bracket_move(m, I, b, tau, g);
+    return CD_OK;
+}
+
 static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, int side, double s, cd_bracket *b)
 {
     double dist = side > 0 ? b->glo / -s : b->ghi / s;
@@ -791,7 +818,13 @@ static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
             if (!newside) failed = 1;
         }
-        /* and the lower end, if the upper one held */
+        /* and the lower end, if the upper one held: first by the upper end's
+         * own state taken back along its derivative (below), then, if that
+         * does not show the old side, by a locator step */
+        if (b.hi == ib.hi && ib.lo > b.lo && budget_left(d, I, 1 + trial_cost(I))) {
+            st = lower_end_back(m, d, I, t0, ib.lo, ib.hi < h ? d->ydot : I->f1s, &b);
+            if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
+        }
         if (b.hi == ib.hi && ib.lo > b.lo && budget_left(d, I, trial_cost(I))) {
             st = bracket_at(m, d, I, t0, ib.lo, &b, &newside);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
