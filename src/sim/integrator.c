@@ -736,15 +736,30 @@ static cd_status lower_end_back(const cd_model *m, cd_data *d, cd_integ *I, doub
 
 static cd_status probe(const cd_model *m, cd_data *d, cd_integ *I, double t0, int side, double s, cd_bracket *b)
 {
+    const double tol = d->opt.event_tol, half = 0.5 * tol * (1.0 - 1e-6);
     double dist = side > 0 ? b->glo / -s : b->ghi / s;
     int k, newside;
-    for (k = 0; k < 3 && b->hi - b->lo > d->opt.event_tol; k++, dist *= 4.0) {
-        double tp = side > 0 ? b->lo + 1.5 * dist + d->opt.event_tol : b->hi - 1.5 * dist - d->opt.event_tol;
+    /* first half a tolerance past the estimated crossing and, if that
+     * brackets it, half a tolerance before it: the bracket is then one
+     * tolerance wide when the estimate holds to half a tolerance (the
+     * crossing is off from the interpolant's by a smooth offset, g is
+     * linear over it); then 1.5 times as far, and 4 times further twice */
+    for (k = 0; k < 4 && b->hi - b->lo > tol; k++) {
+        double far = k == 0 ? dist + half : 1.5 * dist * (k == 1 ? 1.0 : k == 2 ? 4.0 : 16.0) + tol;
+        double tp = side > 0 ? b->lo + far : b->hi - far;
         cd_status st;
-        if (!(tp > b->lo && tp < b->hi) || !budget_left(d, I, trial_cost(I))) break;
+        if (!(tp > b->lo && tp < b->hi) || !budget_left(d, I, trial_cost(I))) continue;
         st = bracket_at(m, d, I, t0, tp, b, &newside);
         if (st != CD_OK) return st;
-        if (newside == (side > 0)) break; /* past the crossing: bracketed */
+        if (newside != (side > 0)) continue; /* not yet past the crossing */
+        if (k == 0) { /* bracketed at the estimate: its other side */
+            double tq = side > 0 ? tp - 2.0 * half : tp + 2.0 * half;
+            if (b->hi - b->lo > tol && tq > b->lo && tq < b->hi && budget_left(d, I, trial_cost(I))) {
+                st = bracket_at(m, d, I, t0, tq, b, &newside);
+                if (st != CD_OK) return st;
+            }
+        }
+        break; /* past the crossing: bracketed */
     }
     return CD_OK;
 }
