@@ -338,22 +338,7 @@ static double trial_force(const cd_contact_law *L, const double RB[9], const dou
     return nf;
 }
 
-/* The slip law of a no-pull contact is continued past its separation guard
- * (discontinuity locking, docs/contact.md "Between events: each mode's law
- * continued past its guards"): between events f_n = f_raw may turn negative
- * in the trial stages that overshoot a separation the locator has not found
- * yet (the normal law is continued there already), and the friction mu_k
- * f_n, with the bristle's cone, follows it smoothly instead of dropping to 0
- * at f_n = 0. The located solution never uses the continuation (the slot
- * opens where f_n reaches 0, to event_tol); what it removes is the kink on
- * the guard that cascaded rejected steps before every slipping separation
- * (docs/performance.md sections 13 and 14). A `pull` contact keeps no
- * friction while f_n < 0: that is its law, not a continuation.
- * 0: the friction dropped at f_n = 0 (the law before, a build-time
- * comparison: make BUILD=build-clip EXTRA_CFLAGS=-DCD_CONTACT_SLIP_SMOOTH=0). */
-#ifndef CD_CONTACT_SLIP_SMOOTH
-#define CD_CONTACT_SLIP_SMOOTH 1
-#endif
+/* CD_CONTACT_SLIP_SMOOTH: contact.h */
 
 /* The saturated bristle of a slipping slot (D_t > 0): its force
  * K_t z_t^pt + D_t zdot^qt equals mu_k f_n s (s the slip direction, unit,

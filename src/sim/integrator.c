@@ -128,6 +128,7 @@ typedef struct {
     int auto_hits;            /* consecutive checks that asked for the other stepper */
     double loc_rho, loc_h;    /* rk4imp, msbdf: the spectral radius at the start of the step an event is
                                  located in (0: none), and that step's length */
+    double loc_hsub;          /* ... and the locator's sub-step (0: one step per trial) */
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled while the switches come fast) */
     long auto_since;          /* accepted steps since the last switch */
@@ -495,12 +496,16 @@ static int one_step(cd_integ *I, double t, double h, double *y)
 
 /* rk4imp and msbdf locate with rk8pd steps across their own (implicit)
  * step, which may be far beyond rk8pd's stability limit on a stiff
- * problem: a trial of length tau is then taken in n equal rk8pd steps with
- * n rho tau/n within rk8pd's real stability interval (CD_AUTO_STIFF, about
- * half of it), rho the spectral radius at the step's start. Without it a
- * trial could land far off the solution, where a switching function is
- * negative for no physical reason: msbdf on the Fig. 5 grasp landed on a
- * stick-slip pair 15 ns long on a contact 0.32 N inside its cone. */
+ * problem: the step of length h is cut into n equal rk8pd sub-steps with
+ * rho h/n within rk8pd's real stability interval (CD_AUTO_STIFF, about half
+ * of it; at most CD_LOC_MAX_SUB, beyond which the sub-steps stay unstable),
+ * rho the spectral radius of the structured Jacobian (docs/events.md section
+ * 6, step 4). A trial of length tau takes the sub-steps of that fixed grid
+ * up to tau and the rest, so its solution is continuous in tau (the root
+ * finder and lower_end_back rely on it). Without the sub-steps a trial
+ * could land far off the solution, where a switching function is negative
+ * for no physical reason: msbdf on the Fig. 5 grasp landed on a stick-slip
+ * pair 15 ns long on a contact 0.32 N inside its cone. */
 #define CD_LOC_MAX_SUB 256
 static int loc_substeps(const cd_integ *I, double tau)
 {
@@ -511,12 +516,16 @@ static int loc_substeps(const cd_integ *I, double tau)
 /* One locator step of length tau from (t0, y0) into y; then cd_forward. */
 static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, double tau, double *y)
 {
-    int st = GSL_SUCCESS, k, n = loc_substeps(I, tau);
+    int st = GSL_SUCCESS, k, nfull = 0;
+    double hs = I->loc_hsub;
     memcpy(y, I->y0, (size_t)m->ny * sizeof(double));
-    for (k = 0; k < n && st == GSL_SUCCESS; k++) {
-        double a = tau * k / n, b = k == n - 1 ? tau : tau * (k + 1) / n;
-        st = one_step(I, t0 + a, b - a, y);
+    if (hs > 0) {
+        nfull = (int)floor(tau / hs);
+        if (nfull > CD_LOC_MAX_SUB) nfull = CD_LOC_MAX_SUB;
+        if (nfull >= 1 && tau - nfull * hs <= 1e-9 * hs) nfull--; /* a sliver left: the last step takes it */
     }
+    for (k = 0; k < nfull && st == GSL_SUCCESS; k++) st = one_step(I, t0 + k * hs, hs, y);
+    if (st == GSL_SUCCESS) st = one_step(I, t0 + nfull * hs, tau - nfull * hs, y);
     d->stats.nlocate_steps++;
     if (st != GSL_SUCCESS) return CD_ENUMERIC;
     d->y = y;
@@ -783,7 +792,7 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
                         int *trigger)
 {
     cd_status st;
-    I->loc_rho = 0.0;
+    I->loc_rho = I->loc_hsub = 0.0;
     if (!I->fixed && implicit_with_explicit_locator(I)) {
         /* the end state and its derivative first: the estimate may evaluate */
         memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
@@ -791,11 +800,12 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
         I->loc_rho = cd_rosw_spectral_radius(&I->rw, t0, I->y0);
         I->loc_h = t1 - t0;
         if (!(I->loc_rho > 0)) I->loc_rho = 0.0;
+        I->loc_hsub = I->loc_rho > 0 ? I->loc_h / loc_substeps(I, I->loc_h) : 0.0;
         memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
         memcpy(d->ydot, I->f1s, (size_t)m->ny * sizeof(double));
     }
     st = locate_in(m, d, I, t0, t1, g_hi, trigger);
-    I->loc_rho = 0.0;
+    I->loc_rho = I->loc_hsub = 0.0;
     return st;
 }
 
@@ -837,7 +847,8 @@ static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0
         /* and the lower end, if the upper one held: first by the upper end's
          * own state taken back along its derivative (below), then, if that
          * does not show the old side, by a locator step */
-        if (b.hi == ib.hi && ib.lo > b.lo && budget_left(d, I, 1 + trial_cost(I))) {
+        if (b.hi == ib.hi && ib.lo > b.lo && ib.hi - ib.lo <= d->opt.event_tol &&
+            budget_left(d, I, 1 + trial_cost(I))) {
             st = lower_end_back(m, d, I, t0, ib.lo, ib.hi < h ? d->ydot : I->f1s, &b);
             if (st != CD_OK) { restore_start(m, d, I, t0, ystate); return st; }
         }

@@ -234,7 +234,7 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
         vpow_vec(fd, vt, L->Dt, L->qt);
         cd_v3_add(ftr, fk, fd);
         nf = cd_v3_norm(ftr);
-        if (!(nf > 0) || !(fn > 0)) return;
+        if (!(nf > 0) || !(fn > 0 || (CD_CONTACT_SLIP_SMOOTH && !L->pull))) return; /* the law contact.c applies */
         cd_v3_scale(sh, ftr, 1.0 / nf);
         c = 1.0 - L->mu_k * fn / nf;
         for (i = 0; i < 9; i++) Ps[i] = (i % 4 == 0) ? 1.0 : 0.0;
@@ -271,7 +271,7 @@ static void slot_derivs(const cd_model *m, const cd_data *d, int k, double Av[9]
         cd_v3_copy(u, va);
         cd_v3_axpy(u, 2.0 * d->opt.v_reg, st);
         nu = cd_v3_norm(u);
-        if (!(nu > 0) || !(fn > 0)) return;
+        if (!(nu > 0) || !(fn > 0 || (CD_CONTACT_SLIP_SMOOTH && !L->pull))) return;
         cd_v3_scale(uh, u, 1.0 / nu);
         memcpy(dva, P, sizeof dva);
         if (L->pt == 1.0) m3_outer_add(dva, L->mu_k * dfk / L->Kt, st, n);
