@@ -126,9 +126,8 @@ typedef struct {
     int autom;                /* stepper is CD_STEP_AUTO */
     int stiff;                /* auto: the stiff stepper is the current one */
     int auto_hits;            /* consecutive checks that asked for the other stepper */
-    double loc_rho, loc_h;    /* rk4imp, msbdf: the spectral radius at the start of the step an event is
-                                 located in (0: none), and that step's length */
-    double loc_hsub;          /* ... and the locator's sub-step (0: one step per trial) */
+    int loc_nsub;             /* rk4imp, msbdf: the locator's sub-steps over the step an event is located in */
+    double loc_hsub;          /* ... and their length (0: one locator step per trial) */
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled while the switches come fast) */
     long auto_since;          /* accepted steps since the last switch */
@@ -507,9 +506,9 @@ static int one_step(cd_integ *I, double t, double h, double *y)
  * for no physical reason: msbdf on the Fig. 5 grasp landed on a stick-slip
  * pair 15 ns long on a contact 0.32 N inside its cone. */
 #define CD_LOC_MAX_SUB 256
-static int loc_substeps(const cd_integ *I, double tau)
+static int loc_substeps(double rho, double h)
 {
-    double n = I->loc_rho > 0 ? ceil(tau * I->loc_rho / CD_AUTO_STIFF) : 1.0;
+    double n = ceil(h * rho / CD_AUTO_STIFF);
     return n < 1.0 ? 1 : n > CD_LOC_MAX_SUB ? CD_LOC_MAX_SUB : (int)n;
 }
 
@@ -521,7 +520,7 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
     memcpy(y, I->y0, (size_t)m->ny * sizeof(double));
     if (hs > 0) {
         nfull = (int)floor(tau / hs);
-        if (nfull > CD_LOC_MAX_SUB) nfull = CD_LOC_MAX_SUB;
+        if (nfull > I->loc_nsub) nfull = I->loc_nsub;
         if (nfull >= 1 && tau - nfull * hs <= 1e-9 * hs) nfull--; /* a sliver left: the last step takes it */
     }
     for (k = 0; k < nfull && st == GSL_SUCCESS; k++) st = one_step(I, t0 + k * hs, hs, y);
@@ -550,7 +549,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 /* evaluations one more locator iteration costs (its stages and the forward) */
 static long trial_cost(const cd_integ *I)
 {
-    if (I->loc_rho > 0) return 14 * (long)loc_substeps(I, I->loc_h);
+    if (I->loc_nsub > 0) return 14 * (long)I->loc_nsub;
     return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
 }
 
@@ -791,21 +790,10 @@ static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0
 static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, double t1, double g_hi,
                         int *trigger)
 {
-    cd_status st;
-    I->loc_rho = I->loc_hsub = 0.0;
-    if (!I->fixed && implicit_with_explicit_locator(I)) {
-        /* the end state and its derivative first: the estimate may evaluate */
-        memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
-        memcpy(I->f1s, d->ydot, (size_t)m->ny * sizeof(double));
-        I->loc_rho = cd_rosw_spectral_radius(&I->rw, t0, I->y0);
-        I->loc_h = t1 - t0;
-        if (!(I->loc_rho > 0)) I->loc_rho = 0.0;
-        I->loc_hsub = I->loc_rho > 0 ? I->loc_h / loc_substeps(I, I->loc_h) : 0.0;
-        memcpy(d->y, I->yhi, (size_t)m->ny * sizeof(double));
-        memcpy(d->ydot, I->f1s, (size_t)m->ny * sizeof(double));
-    }
-    st = locate_in(m, d, I, t0, t1, g_hi, trigger);
-    I->loc_rho = I->loc_hsub = 0.0;
+    /* the locator's sub-steps (set in locate_in) hold for this event only */
+    cd_status st = locate_in(m, d, I, t0, t1, g_hi, trigger);
+    I->loc_nsub = 0;
+    I->loc_hsub = 0.0;
     return st;
 }
 
@@ -821,6 +809,15 @@ static cd_status locate_in(const cd_model *m, cd_data *d, cd_integ *I, double t0
     /* the end of the step and its derivative (d was evaluated there) */
     memcpy(I->yhi, d->y, (size_t)m->ny * sizeof(double));
     memcpy(I->f1s, d->ydot, (size_t)m->ny * sizeof(double));
+    if (!I->fixed && implicit_with_explicit_locator(I)) {
+        /* the sub-steps of the locator (trial), from the spectral radius;
+         * its estimate may evaluate d, which is evaluated at (t0, y0) below */
+        double rho = cd_rosw_spectral_radius(&I->rw, t0, I->y0);
+        if (rho > 0) {
+            I->loc_nsub = loc_substeps(rho, h);
+            I->loc_hsub = h / I->loc_nsub;
+        }
+    }
     /* g at the start (modes unchanged) */
     d->y = I->y0;
     d->t = t0;
