@@ -36,21 +36,27 @@ static void plain_close(plain *P)
 }
 
 /* fixed steps over [0, 2]: the max-norm global error at t = 2 */
-static double global_error(const gsl_odeiv2_step_type *T, int nsteps)
+static double global_error_sys(const gsl_odeiv2_step_type *T, int nsteps, gsl_odeiv2_system *sys)
 {
-    gsl_odeiv2_system sys = {smooth_f, smooth_j, 2, NULL};
     plain P;
     double y[2], err[2], u[2], h = 2.0 / nsteps, t = 0;
     int i;
     plain_open(&P, T, 2);
     exact(0, y);
     for (i = 0; i < nsteps; i++) {
-        cr_assert_eq(gsl_odeiv2_step_apply(P.s, t, h, y, err, NULL, NULL, &sys), GSL_SUCCESS);
+        cr_assert_eq(gsl_odeiv2_step_apply(P.s, t, h, y, err, NULL, NULL, sys), GSL_SUCCESS);
         t = (i + 1) * h;
     }
     plain_close(&P);
     exact(2.0, u);
     return fmax(fabs(y[0] - u[0]), fabs(y[1] - u[1]));
+}
+
+/* ... on smooth_f with its exact Jacobian */
+static double global_error(const gsl_odeiv2_step_type *T, int nsteps)
+{
+    gsl_odeiv2_system sys = {smooth_f, smooth_j, 2, NULL};
+    return global_error_sys(T, nsteps, &sys);
 }
 
 /* The published tableau, converted: its row sums are rodas.f's nodes c_i and
@@ -98,6 +104,48 @@ Test(ros4, global_error_is_of_order_4)
             cr_expect(p3 >= 2.7 && p3 <= 3.3, "ros34pw2 (control): slope %.3f, expected 3 +- 0.3", p3);
     }
     cr_expect_lt(e[4], 1e-9, "rodas4 at N = 320: error %.3e", e[4]);
+}
+
+/* A matrix that has nothing to do with the Jacobian of smooth_f (constant,
+ * other signs and sizes) and no df/dt. */
+static int wrong_j(double t, const double y[], double *J, double dfdt[], void *p)
+{
+    (void)t;
+    (void)y;
+    (void)p;
+    J[0] = -3.0; J[1] = 0.7;
+    J[2] = 1.9;  J[3] = 0.4;
+    dfdt[0] = dfdt[1] = 0;
+    return GSL_SUCCESS;
+}
+
+/* ros34pw2 is a W-method: its order 3 holds whatever matrix stands in for
+ * the Jacobian, which is what lets capdyn keep a Jacobian over steps and
+ * leave terms out of the structured one (rosw.c). Its stages are computed in
+ * transformed unknowns (rosw.c, rosw_state), an exact rewriting for any
+ * matrix; this checks that rewriting where an exact Jacobian would hide an
+ * error that cancels only for it. With wrong_j the global error falls by 2^3
+ * per halving (measured slopes 3.07, 3.04, 3.02, 3.01, errors 4.4e-5 ...
+ * 9.8e-9); rodas4, a Rosenbrock method whose order needs the exact Jacobian,
+ * is the control: with the same matrix its order drops (measured slopes 1.39,
+ * 0.86, 0.77, 0.90). */
+Test(ros4, ros34pw2_keeps_order_3_with_any_matrix)
+{
+    gsl_odeiv2_system sys = {smooth_f, wrong_j, 2, NULL};
+    int N[5] = {40, 80, 160, 320, 640}, i;
+    double e[5], e4[5];
+    for (i = 0; i < 5; i++) {
+        e[i] = global_error_sys(cd_step_ros34pw2, N[i], &sys);
+        e4[i] = global_error_sys(cd_step_rodas4, N[i], &sys);
+    }
+    for (i = 0; i + 1 < 5; i++) {
+        double p = log2(e[i] / e[i + 1]), p4 = log2(e4[i] / e4[i + 1]);
+        cr_log_info("N %d -> %d: ros34pw2 error %.3e -> %.3e, slope %.3f; rodas4 slope %.3f", N[i], N[i + 1], e[i],
+                    e[i + 1], p, p4);
+        cr_expect(p >= 2.7 && p <= 3.3, "ros34pw2 with a wrong matrix: slope %.3f between N = %d and %d, expected 3 +- 0.3",
+                  p, N[i], N[i + 1]);
+        cr_expect(p4 < 2.5, "rodas4 (control) with a wrong matrix: slope %.3f, expected its order to drop", p4);
+    }
 }
 
 /* The embedded estimate: for one step from t = 0.3 the estimate |y - yhat|

@@ -26,6 +26,8 @@
  * Stages (increments k_i include h; gamma the diagonal):
  *   (I - h gamma J) k_i = h f(t + a_i h, y + sum_j alpha_ij k_j) + h J sum_j gamma_ij k_j
  *   y1 = y + sum b_i k_i,   error = sum (b_i - bhat_i) k_i.
+ * They are computed in the transformed unknowns u_i = sum_j Gamma_ij k_j
+ * (rosw_state), which needs no product of J with a vector.
  * f(t, y) comes from the driver (can_use_dydt_in). dydt_out must be the
  * exact f(t + h, y1): GSL's evolve hands it back as the next step's dydt_in
  * (whatever gives_exact_dydt_out says), and the standard control scales the
@@ -112,11 +114,24 @@ int cd_rosw_jacobian(cd_rosw *w, double t, const double *y, const double *f0, co
     return jacobian(w, t, y, f0, sys, 0);
 }
 
+/* bytes of the reduced solve's sparse blocks (carve: sv, sp, sc): at most
+ * 2 nU (na - nU) <= na^2 / 2 nonzeros */
+static size_t rosw_sparse_size(size_t na)
+{
+    return (na * na / 2 + 1) * (sizeof(double) + sizeof(int)) + (2 * na + 2) * sizeof(int) + 16;
+}
+
+/* bytes of the runs of unknowns that can move (carve: rlo, rhi) */
+static size_t rosw_runs_size(size_t n)
+{
+    return 2 * (n + 2) * sizeof(int);
+}
+
 size_t cd_rosw_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
     return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
-           cd_jacw_size(m, (int)na);
+           rosw_sparse_size(na) + rosw_runs_size(n) + cd_jacw_size(m, (int)na);
 }
 
 /* The buffers of w from p (aligned): the three na x na matrices, the stage
@@ -127,6 +142,7 @@ static int *carve(cd_rosw *w, double *p, size_t n, size_t na)
     w->J = p; p += na * na;
     w->W = p; p += na * na;
     w->M2 = p; p += na * na;
+    w->sv = p; p += na * na / 2 + 1;
     w->tu = p; p += na;
     for (i = 0; i < CD_ROSW_SMAX; i++) { w->k[i] = p; p += n; }
     w->ft = p; p += n;
@@ -140,7 +156,11 @@ static int *carve(cd_rosw *w, double *p, size_t n, size_t na)
     w->iP = w->act + na;
     w->iU = w->iP + na;
     w->iZ = w->iU + na;
-    return w->iZ + na;
+    w->sp = w->iZ + na;
+    w->sc = w->sp + 2 * na + 2;
+    w->rlo = w->sc + na * na / 2 + 1;
+    w->rhi = w->rlo + n + 2;
+    return w->rhi + n + 2;
 }
 
 void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
@@ -159,7 +179,8 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
 size_t cd_rosw_size_plain(int ny)
 {
     size_t n = (size_t)(ny > 0 ? ny : 1), na = n + 1;
-    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16;
+    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
+           rosw_sparse_size(na) + rosw_runs_size(n);
 }
 
 void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem)
@@ -195,6 +216,33 @@ static void active_set(cd_rosw *w)
         }
     for (i = 0; i < m->nfric; i++) w->act[na++] = m->ny_fric_adr + i;
     w->na = na;
+}
+
+/* The runs of unknowns that can move at the current modes, [rlo, rhi): every
+ * one but the anchors of open slots. An open slot's anchor has derivative
+ * exactly 0 (contact.c writes 0 at every evaluation, and a mode changes only
+ * at an event, between steps), so every stage leaves it where it is, with
+ * error 0 (as rk8.c skips them). Without a model (cd_rosw_init_plain), one
+ * run of every unknown. */
+static void move_runs(cd_rosw *w)
+{
+    const cd_model *m = w->m;
+    int k;
+    w->nrun = 0;
+#define ADD_RUN(a, b)                                                                                       \
+    do {                                                                                                    \
+        if (w->nrun > 0 && w->rhi[w->nrun - 1] == (a)) w->rhi[w->nrun - 1] = (b);                          \
+        else if ((b) > (a)) { w->rlo[w->nrun] = (a); w->rhi[w->nrun] = (b); w->nrun++; }                 \
+    } while (0)
+    if (!m || m->ny != w->ny) {
+        ADD_RUN(0, w->ny);
+        return;
+    }
+    ADD_RUN(0, m->ny_slot_adr);
+    for (k = 0; k < m->nslot; k++)
+        if (w->d->slot_mode[k] != CD_MODE_OPEN) ADD_RUN(m->ny_slot_adr + 3 * k, m->ny_slot_adr + 3 * k + 3);
+    ADD_RUN(m->ny_fric_adr, m->ny);
+#undef ADD_RUN
 }
 
 /* The reduced solve. A structured Jacobian has the pattern of a second-order
@@ -244,20 +292,41 @@ static void reduce(cd_rosw *w)
         for (j = 0; j < w->nP; j++) w->J[(size_t)w->iZ[i] * na + w->iP[j]] = 0;
         for (j = 0; j < w->nZ; j++) w->J[(size_t)w->iZ[i] * na + w->iZ[j]] = 0;
     }
-    for (i = 0; i < w->nU; i++)
-        for (j = 0; j < w->nU; j++) {
+    /* the blocks the solve multiplies by, as sparse rows (solve_active): the
+     * velocities' rows over the positions' and anchors' columns (in the order
+     * iP then iZ), then the positions' and anchors' rows over the velocities'
+     * columns. Most of the latter are zero (a position moves with its own
+     * velocity, an anchor with the velocities of its two bodies). */
+    {
+        int nnz = 0, r = 0, nPZ = w->nP + w->nZ;
+        for (i = 0; i < w->nU; i++, r++) {
             const double *Ju = w->J + (size_t)w->iU[i] * na;
-            double acc = 0;
-            for (k = 0; k < w->nP; k++) {
-                double l = Ju[w->iP[k]];
-                if (l != 0) acc += l * w->J[(size_t)w->iP[k] * na + w->iU[j]];
+            w->sp[r] = nnz;
+            for (k = 0; k < nPZ; k++) {
+                double v = Ju[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]];
+                if (v != 0) { w->sv[nnz] = v; w->sc[nnz++] = k; }
             }
-            for (k = 0; k < w->nZ; k++) {
-                double l = Ju[w->iZ[k]];
-                if (l != 0) acc += l * w->J[(size_t)w->iZ[k] * na + w->iU[j]];
-            }
-            w->M2[(size_t)i * w->nU + j] = acc;
         }
+        for (k = 0; k < nPZ; k++, r++) {
+            const double *Jr = w->J + (size_t)(k < w->nP ? w->iP[k] : w->iZ[k - w->nP]) * na;
+            w->sp[r] = nnz;
+            for (j = 0; j < w->nU; j++)
+                if (Jr[w->iU[j]] != 0) { w->sv[nnz] = Jr[w->iU[j]]; w->sc[nnz++] = j; }
+        }
+        w->sp[r] = nnz;
+    }
+    /* M2 = J_U,PZ J_PZ,U from the sparse rows: row i of M2 sums, over the
+     * nonzeros (k, v) of row i of J_U,PZ in the order of k, v times row k of
+     * J_PZ,U */
+    for (i = 0; i < w->nU; i++) {
+        double *Mi = w->M2 + (size_t)i * w->nU;
+        int e, f;
+        for (j = 0; j < w->nU; j++) Mi[j] = 0;
+        for (e = w->sp[i]; e < w->sp[i + 1]; e++) {
+            const int row = w->nU + w->sc[e];
+            for (f = w->sp[row]; f < w->sp[row + 1]; f++) Mi[w->sc[f]] += w->sv[e] * w->sv[f];
+        }
+    }
     w->red = 1;
 }
 
@@ -385,43 +454,81 @@ static int factor(cd_rosw *w, double h)
 /* r <- (I - h gamma J)^-1 r on the active set (the LU of factor) */
 static int solve_active(cd_rosw *w, double *r)
 {
-    int na = w->na, i, k;
-    double c = w->lu_h * w->gam, *u = w->tu;
+    int na = w->na, nPZ = w->nP + w->nZ, i, k, e;
+    double c = w->lu_h * w->gam, *u = w->tu, *rpz = w->g;
     if (!w->red) {
         cd_rosw_lu_solve(w->W, na, w->perm, r);
         return GSL_SUCCESS;
     }
+    for (k = 0; k < nPZ; k++) rpz[k] = r[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]];
     for (i = 0; i < w->nU; i++) {
-        const double *Ju = w->J + (size_t)w->iU[i] * na;
         double acc = 0;
-        for (k = 0; k < w->nP; k++) acc += Ju[w->iP[k]] * r[w->iP[k]];
-        for (k = 0; k < w->nZ; k++) acc += Ju[w->iZ[k]] * r[w->iZ[k]];
+        for (e = w->sp[i]; e < w->sp[i + 1]; e++) acc += w->sv[e] * rpz[w->sc[e]];
         u[i] = r[w->iU[i]] + c * acc;
     }
     if (w->nU) cd_rosw_lu_solve(w->W, w->nU, w->perm, u);
-    for (k = 0; k < w->nP; k++) {
-        const double *Jp = w->J + (size_t)w->iP[k] * na;
+    for (k = 0; k < nPZ; k++) {
+        const int row = w->nU + k;
         double acc = 0;
-        for (i = 0; i < w->nU; i++) acc += Jp[w->iU[i]] * u[i];
-        r[w->iP[k]] += c * acc;
-    }
-    for (k = 0; k < w->nZ; k++) {
-        const double *Jz = w->J + (size_t)w->iZ[k] * na;
-        double acc = 0;
-        for (i = 0; i < w->nU; i++) acc += Jz[w->iU[i]] * u[i];
-        r[w->iZ[k]] += c * acc;
+        for (e = w->sp[row]; e < w->sp[row + 1]; e++) acc += w->sv[e] * u[w->sc[e]];
+        r[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]] = rpz[k] + c * acc;
     }
     for (i = 0; i < w->nU; i++) r[w->iU[i]] = u[i];
     return GSL_SUCCESS;
 }
 
+/* The stepper's state. The stages are computed in the transformed unknowns
+ * u_i = sum_{j<=i} Gamma_ij k_j (Gamma: the tableau's gamma below the
+ * diagonal, gam on it), as rodas.f and PETSc's TSROSW do. Substituting
+ * k = Gamma^-1 u in the stage equation above gives, exactly for any J,
+ *   (I - h gam J) u_i = h gam (F_i + gsum_i h df/dt) - sum_{j<i} cu_ij u_j,
+ *   Y_i = y + sum_{j<i} au_ij u_j,   y1 = y + sum_i mu_i u_i,   error = sum_i eu_i u_i,
+ * with au = alpha Gamma^-1, cu_ij = gam (Gamma^-1)_ij, mu = b Gamma^-1,
+ * eu = (b - bhat) Gamma^-1 (transform(), from the tableau when bound). So a
+ * stage needs no product of J with a vector: the right-hand side of each solve
+ * is formed from the stage vectors alone, one pass over y. */
 typedef struct {
     cd_rosw *w;
     const rosw_tab *tab;
     int locator;
     int have_prev;
     double t_prev;
+    double au[CD_ROSW_SMAX][CD_ROSW_SMAX], cu[CD_ROSW_SMAX][CD_ROSW_SMAX], ai[CD_ROSW_SMAX];
+    double mu[CD_ROSW_SMAX], eu[CD_ROSW_SMAX];
 } rosw_state;
+
+/* au, cu, mu, eu and the nodes ai of the bound tableau (see rosw_state) */
+static void transform(rosw_state *st)
+{
+    const rosw_tab *T = st->tab;
+    double Gi[CD_ROSW_SMAX][CD_ROSW_SMAX] = {{0}};
+    int i, j, k, s = T->s;
+    /* Gamma^-1 by forward substitution: Gamma is lower triangular, gam on the diagonal */
+    for (j = 0; j < s; j++) {
+        Gi[j][j] = 1.0 / T->gam;
+        for (i = j + 1; i < s; i++) {
+            double acc = 0;
+            for (k = j; k < i; k++) acc += T->gamma[i][k] * Gi[k][j];
+            Gi[i][j] = -acc / T->gam;
+        }
+    }
+    for (i = 0; i < s; i++) {
+        st->ai[i] = 0;
+        st->mu[i] = st->eu[i] = 0;
+        for (j = 0; j < s; j++) {
+            st->au[i][j] = st->cu[i][j] = 0;
+            if (j < i) {
+                st->ai[i] += T->alpha[i][j];
+                st->cu[i][j] = T->gam * Gi[i][j];
+                for (k = j; k < i; k++) st->au[i][j] += T->alpha[i][k] * Gi[k][j];
+            }
+        }
+        for (k = i; k < s; k++) {
+            st->mu[i] += T->b[k] * Gi[k][i];
+            st->eu[i] += (T->b[k] - T->bhat[k]) * Gi[k][i];
+        }
+    }
+}
 
 static void *rosw_alloc(size_t dim)
 {
@@ -437,7 +544,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
     rosw_state *s = (rosw_state *)vs;
     cd_rosw *w = s->w;
     const rosw_tab *T = s->tab;
-    int n = (int)dim, i, j, a, c, na;
+    int n = (int)dim, i, j, a, c, r, na;
     const double *f0;
     if (!w || n != w->ny) return GSL_EINVAL;
     if (dydt_in) {
@@ -468,56 +575,54 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         w->gam = T->gam;
         if (factor(w, h) != GSL_SUCCESS) return GSL_FAILURE;
     }
+    /* the stage algebra runs over the unknowns that can move; the others keep
+     * y in every stage argument and in the solution, with error 0 */
+    move_runs(w);
+    memcpy(w->ytmp, y, (size_t)n * sizeof(double));
     for (i = 0; i < T->s; i++) {
-        double *k = w->k[i], ai = 0;
+        double *u = w->k[i], hg = h * T->gam;
         const double *F;
         if (i == 0) {
             F = f0;
         } else {
-            memcpy(w->ytmp, y, (size_t)n * sizeof(double));
-            for (j = 0; j < i; j++) {
-                ai += T->alpha[i][j];
-                if (T->alpha[i][j] != 0)
-                    for (c = 0; c < n; c++) w->ytmp[c] += T->alpha[i][j] * w->k[j][c];
-            }
-            if (GSL_ODEIV_FN_EVAL(sys, t + ai * h, w->ytmp, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
+            for (r = 0; r < w->nrun; r++)
+                for (c = w->rlo[r]; c < w->rhi[r]; c++) {
+                    double acc = y[c];
+                    for (j = 0; j < i; j++) acc += s->au[i][j] * w->k[j][c];
+                    w->ytmp[c] = acc;
+                }
+            if (GSL_ODEIV_FN_EVAL(sys, t + s->ai[i] * h, w->ytmp, w->fs) != GSL_SUCCESS) return GSL_EBADFUNC;
             F = w->fs;
         }
-        /* k = h F (+ h J g on the active rows), then the solve on the active set */
-        if (i > 0) {
-            memset(w->g, 0, (size_t)n * sizeof(double));
-            for (j = 0; j < i; j++)
-                for (a = 0; a < na; a++) w->g[w->act[a]] += T->gamma[i][j] * w->k[j][w->act[a]];
-        }
-        for (c = 0; c < n; c++) k[c] = h * F[c];
-        if (T->exact && T->gsum[i] != 0)
-            for (c = 0; c < n; c++) k[c] += T->gsum[i] * h * h * w->ft[c];
-        if (na) {
-            for (a = 0; a < na; a++) {
-                double acc = k[w->act[a]];
-                if (i > 0) {
-                    const double *Ja = w->J + (size_t)a * (size_t)na;
-                    double jg = 0;
-                    for (c = 0; c < na; c++) jg += Ja[c] * w->g[w->act[c]];
-                    acc += h * jg;
-                }
-                w->r[a] = acc;
+        /* the right-hand side h gam F_i (+ df/dt) - sum_j cu_ij u_j, then the solve on the active set
+         * (the other unknowns have no Jacobian rows: theirs is the right-hand side itself) */
+        for (r = 0; r < w->nrun; r++)
+            for (c = w->rlo[r]; c < w->rhi[r]; c++) {
+                double acc = hg * F[c];
+                if (T->exact && T->gsum[i] != 0) acc += hg * T->gsum[i] * h * w->ft[c];
+                for (j = 0; j < i; j++) acc -= s->cu[i][j] * w->k[j][c];
+                u[c] = acc;
             }
+        if (na) {
+            for (a = 0; a < na; a++) w->r[a] = u[w->act[a]];
             if (solve_active(w, w->r) != GSL_SUCCESS) return GSL_FAILURE;
-            for (a = 0; a < na; a++) k[w->act[a]] = w->r[a];
+            for (a = 0; a < na; a++) u[w->act[a]] = w->r[a];
         }
-        for (c = 0; c < n; c++)
-            if (!isfinite(k[c])) return GSL_FAILURE;
+        for (r = 0; r < w->nrun; r++)
+            for (c = w->rlo[r]; c < w->rhi[r]; c++)
+                if (!isfinite(u[c])) return GSL_FAILURE;
     }
-    for (c = 0; c < n; c++) {
-        double dy = 0, e = 0;
-        for (i = 0; i < T->s; i++) {
-            dy += T->b[i] * w->k[i][c];
-            e += (T->b[i] - T->bhat[i]) * w->k[i][c];
+    memset(yerr, 0, (size_t)n * sizeof(double));
+    for (r = 0; r < w->nrun; r++)
+        for (c = w->rlo[r]; c < w->rhi[r]; c++) {
+            double dy = 0, e = 0;
+            for (i = 0; i < T->s; i++) {
+                dy += s->mu[i] * w->k[i][c];
+                e += s->eu[i] * w->k[i][c];
+            }
+            y[c] += dy;
+            yerr[c] = e;
         }
-        y[c] += dy;
-        yerr[c] = e;
-    }
     if (na && T->filter) { /* the error estimate filtered by (I - h gamma J)^-1: stiff components, which
                             * the L-stable solution damps but the embedded one does not, do not count */
         for (a = 0; a < na; a++) w->r[a] = yerr[w->act[a]];
@@ -622,6 +727,7 @@ void cd_rosw_bind(gsl_odeiv2_step *s, cd_rosw *w, int locator)
     st->tab = s->type == cd_step_rodas4 ? &TAB_RODAS4 : &TAB_ROS34PW2;
     w->gam = st->tab->gam;
     w->lu_ok = 0;
+    transform(st);
     st->locator = locator;
     st->have_prev = 0;
 }

@@ -48,6 +48,9 @@ typedef struct {
     int *iP, *iU, *iZ;        /* (na_max each) their places in the active set */
     double *M2;               /* (na_max^2) J_UP J_PU + J_UZ J_ZU, nU x nU */
     double *tu;               /* (na_max) */
+    double *sv;               /* (na_max^2 / 2) nonzeros of J_U,PZ then J_PZ,U (reduce()) */
+    int *sp, *sc;             /* their row starts (2 na_max + 2) and columns */
+    int nrun, *rlo, *rhi;     /* (ny + 2 each) the runs of unknowns that can move (rosw.c, move_runs) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
