@@ -491,7 +491,7 @@ typedef struct {
     cd_rosw *w;
     const rosw_tab *tab;
     int locator;
-    int have_prev;
+    int have_prev, nretry;
     double t_prev;
     double au[CD_ROSW_SMAX][CD_ROSW_SMAX], cu[CD_ROSW_SMAX][CD_ROSW_SMAX], ai[CD_ROSW_SMAX];
     double mu[CD_ROSW_SMAX], eu[CD_ROSW_SMAX];
@@ -561,9 +561,12 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
         if (!w->jac_ok || w->jac_t != t)
             if (jacobian(w, t, y, f0, sys, !CD_RODAS4_STRUCTURED_JAC) != GSL_SUCCESS) return GSL_EBADFUNC;
     } else if (!s->locator) {
-        /* a retry at the same start (the last step was rejected) renews an old Jacobian */
+        /* the CD_ROSW_RENEW_ON_RETRY-th retry at the same start (the steps
+         * before were rejected) renews a Jacobian formed earlier */
         int retry = s->have_prev && s->t_prev == t;
-        if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE || (CD_ROSW_RENEW_ON_RETRY && retry && w->jac_t != t))
+        s->nretry = retry ? s->nretry + 1 : 0;
+        if (!w->jac_ok || w->jac_age >= CD_ROSW_JAC_AGE ||
+            (CD_ROSW_RENEW_ON_RETRY && s->nretry >= CD_ROSW_RENEW_ON_RETRY && w->jac_t != t))
             if (jacobian(w, t, y, f0, sys, 0) != GSL_SUCCESS) return GSL_EBADFUNC;
         s->have_prev = 1;
         s->t_prev = t;

@@ -14,10 +14,13 @@
 #ifndef CD_ROSW_JAC_AGE
 #define CD_ROSW_JAC_AGE 20
 #endif
-/* 1: a step retried after a rejection renews a Jacobian formed earlier; 0
- * keeps it (a build-time trial, docs/performance.md: -DCD_ROSW_RENEW_ON_RETRY=0). */
+/* N: the N-th consecutive retry from the same start (the steps before were
+ * rejected) renews a Jacobian formed earlier; 0 never does. 2 by default: a
+ * first rejection is most often the error estimate asking for a shorter step
+ * (docs/performance.md section 15 measures 1, 2 and 0; a build-time trial:
+ * -DCD_ROSW_RENEW_ON_RETRY=1). */
 #ifndef CD_ROSW_RENEW_ON_RETRY
-#define CD_ROSW_RENEW_ON_RETRY 1
+#define CD_ROSW_RENEW_ON_RETRY 2
 #endif
 
 /* 1: rodas4 uses the structured Jacobian (simulation.jacobian) without df/dt
