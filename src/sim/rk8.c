@@ -104,29 +104,33 @@ static void *rk8_alloc(size_t dim)
     return s;
 }
 
-static void add_run(rk8_state *s, int a, int b)
+static void add_run(int *lo, int *hi, int *nrun, int a, int b)
 {
     if (b <= a) return;
-    if (s->nrun > 0 && s->hi[s->nrun - 1] == a) { s->hi[s->nrun - 1] = b; return; }
-    s->lo[s->nrun] = a;
-    s->hi[s->nrun] = b;
-    s->nrun++;
+    if (*nrun > 0 && hi[*nrun - 1] == a) { hi[*nrun - 1] = b; return; }
+    lo[*nrun] = a;
+    hi[*nrun] = b;
+    (*nrun)++;
+}
+
+int cd_moving_runs(const cd_model *m, const cd_data *d, int ny, int *lo, int *hi)
+{
+    int k, nrun = 0;
+    if (!m || !d || m->ny != ny) {
+        add_run(lo, hi, &nrun, 0, ny);
+        return nrun;
+    }
+    add_run(lo, hi, &nrun, 0, m->ny_slot_adr);
+    for (k = 0; k < m->nslot; k++)
+        if (d->slot_mode[k] != CD_MODE_OPEN) add_run(lo, hi, &nrun, m->ny_slot_adr + 3 * k, m->ny_slot_adr + 3 * k + 3);
+    add_run(lo, hi, &nrun, m->ny_fric_adr, m->ny);
+    return nrun;
 }
 
 /* the unknowns that can move at the current modes (header) */
 static void runs(rk8_state *s)
 {
-    const cd_model *m = s->mp ? *s->mp : NULL;
-    int k;
-    s->nrun = 0;
-    if (!m || (size_t)m->ny != s->dim) {
-        add_run(s, 0, (int)s->dim);
-        return;
-    }
-    add_run(s, 0, m->ny_slot_adr);
-    for (k = 0; k < m->nslot; k++)
-        if (s->d->slot_mode[k] != CD_MODE_OPEN) add_run(s, m->ny_slot_adr + 3 * k, m->ny_slot_adr + 3 * k + 3);
-    add_run(s, m->ny_fric_adr, m->ny);
+    s->nrun = cd_moving_runs(s->mp ? *s->mp : NULL, s->d, (int)s->dim, s->lo, s->hi);
 }
 
 static int rk8_apply(void *vs, size_t dim, double t, double h, double y[], double yerr[], const double dydt_in[],

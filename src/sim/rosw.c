@@ -34,6 +34,7 @@
  * tolerance with it. A step so costs 4 evaluations (3 stages and the end),
  * plus the Jacobian when it is renewed. */
 #include "rosw.h"
+#include "rk8.h"
 #include "../math/cd_math.h"
 
 #include <gsl/gsl_errno.h>
@@ -114,24 +115,21 @@ int cd_rosw_jacobian(cd_rosw *w, double t, const double *y, const double *f0, co
     return jacobian(w, t, y, f0, sys, 0);
 }
 
-/* bytes of the reduced solve's sparse blocks (carve: sv, sp, sc): at most
- * 2 nU (na - nU) <= na^2 / 2 nonzeros */
-static size_t rosw_sparse_size(size_t na)
+/* Bytes of carve()'s buffers for n unknowns and an active capacity na - 1
+ * (16-aligned start): the three na x na matrices, the sparse rows of the
+ * reduced solve (at most 2 nU (na - nU) <= na^2 / 2 nonzeros), the stage and
+ * work vectors, the index arrays and the runs of unknowns that can move. */
+static size_t buf_size(size_t n, size_t na)
 {
-    return (na * na / 2 + 1) * (sizeof(double) + sizeof(int)) + (2 * na + 2) * sizeof(int) + 16;
-}
-
-/* bytes of the runs of unknowns that can move (carve: rlo, rhi) */
-static size_t rosw_runs_size(size_t n)
-{
-    return 2 * (n + 2) * sizeof(int);
+    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
+           (na * na / 2 + 1) * (sizeof(double) + sizeof(int)) + (2 * na + 2) * sizeof(int) + 16 +
+           2 * (n + 2) * sizeof(int);
 }
 
 size_t cd_rosw_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), na = (size_t)na_capacity(m) + 1;
-    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
-           rosw_sparse_size(na) + rosw_runs_size(n) + cd_jacw_size(m, (int)na);
+    return buf_size(n, na) + cd_jacw_size(m, (int)na);
 }
 
 /* The buffers of w from p (aligned): the three na x na matrices, the stage
@@ -179,8 +177,7 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
 size_t cd_rosw_size_plain(int ny)
 {
     size_t n = (size_t)(ny > 0 ? ny : 1), na = n + 1;
-    return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
-           rosw_sparse_size(na) + rosw_runs_size(n);
+    return buf_size(n, na);
 }
 
 void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem)
@@ -218,32 +215,8 @@ static void active_set(cd_rosw *w)
     w->na = na;
 }
 
-/* The runs of unknowns that can move at the current modes, [rlo, rhi): every
- * one but the anchors of open slots. An open slot's anchor has derivative
- * exactly 0 (contact.c writes 0 at every evaluation, and a mode changes only
- * at an event, between steps), so every stage leaves it where it is, with
- * error 0 (as rk8.c skips them). Without a model (cd_rosw_init_plain), one
- * run of every unknown. */
-static void move_runs(cd_rosw *w)
-{
-    const cd_model *m = w->m;
-    int k;
-    w->nrun = 0;
-#define ADD_RUN(a, b)                                                                                       \
-    do {                                                                                                    \
-        if (w->nrun > 0 && w->rhi[w->nrun - 1] == (a)) w->rhi[w->nrun - 1] = (b);                          \
-        else if ((b) > (a)) { w->rlo[w->nrun] = (a); w->rhi[w->nrun] = (b); w->nrun++; }                 \
-    } while (0)
-    if (!m || m->ny != w->ny) {
-        ADD_RUN(0, w->ny);
-        return;
-    }
-    ADD_RUN(0, m->ny_slot_adr);
-    for (k = 0; k < m->nslot; k++)
-        if (w->d->slot_mode[k] != CD_MODE_OPEN) ADD_RUN(m->ny_slot_adr + 3 * k, m->ny_slot_adr + 3 * k + 3);
-    ADD_RUN(m->ny_fric_adr, m->ny);
-#undef ADD_RUN
-}
+/* the place in the active set of the k-th of the positions and anchors (iP, then iZ) */
+static int pz_at(const cd_rosw *w, int k) { return k < w->nP ? w->iP[k] : w->iZ[k - w->nP]; }
 
 /* The reduced solve. A structured Jacobian has the pattern of a second-order
  * system: positions move with the velocities (P rows: U columns, and the
@@ -303,12 +276,12 @@ static void reduce(cd_rosw *w)
             const double *Ju = w->J + (size_t)w->iU[i] * na;
             w->sp[r] = nnz;
             for (k = 0; k < nPZ; k++) {
-                double v = Ju[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]];
+                double v = Ju[pz_at(w, k)];
                 if (v != 0) { w->sv[nnz] = v; w->sc[nnz++] = k; }
             }
         }
         for (k = 0; k < nPZ; k++, r++) {
-            const double *Jr = w->J + (size_t)(k < w->nP ? w->iP[k] : w->iZ[k - w->nP]) * na;
+            const double *Jr = w->J + (size_t)pz_at(w, k) * na;
             w->sp[r] = nnz;
             for (j = 0; j < w->nU; j++)
                 if (Jr[w->iU[j]] != 0) { w->sv[nnz] = Jr[w->iU[j]]; w->sc[nnz++] = j; }
@@ -460,7 +433,7 @@ static int solve_active(cd_rosw *w, double *r)
         cd_rosw_lu_solve(w->W, na, w->perm, r);
         return GSL_SUCCESS;
     }
-    for (k = 0; k < nPZ; k++) rpz[k] = r[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]];
+    for (k = 0; k < nPZ; k++) rpz[k] = r[pz_at(w, k)];
     for (i = 0; i < w->nU; i++) {
         double acc = 0;
         for (e = w->sp[i]; e < w->sp[i + 1]; e++) acc += w->sv[e] * rpz[w->sc[e]];
@@ -471,7 +444,7 @@ static int solve_active(cd_rosw *w, double *r)
         const int row = w->nU + k;
         double acc = 0;
         for (e = w->sp[row]; e < w->sp[row + 1]; e++) acc += w->sv[e] * u[w->sc[e]];
-        r[k < w->nP ? w->iP[k] : w->iZ[k - w->nP]] = rpz[k] + c * acc;
+        r[pz_at(w, k)] = rpz[k] + c * acc;
     }
     for (i = 0; i < w->nU; i++) r[w->iU[i]] = u[i];
     return GSL_SUCCESS;
@@ -580,7 +553,7 @@ static int rosw_apply(void *vs, size_t dim, double t, double h, double y[], doub
     }
     /* the stage algebra runs over the unknowns that can move; the others keep
      * y in every stage argument and in the solution, with error 0 */
-    move_runs(w);
+    w->nrun = cd_moving_runs(w->m, w->d, w->ny, w->rlo, w->rhi);
     memcpy(w->ytmp, y, (size_t)n * sizeof(double));
     for (i = 0; i < T->s; i++) {
         double *u = w->k[i], hg = h * T->gam;

@@ -37,7 +37,8 @@ typedef struct {
     int *act;                 /* (na_max) their indices in y */
     double *J, *W;            /* (na_max^2) Jacobian on the active set; iteration matrix, LU */
     int *perm;                /* (na_max) row interchanges of the LU */
-    double *k[6], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny); r: (na_max) */
+    double *k[6], *g, *ytmp, *fs, *fd, *r; /* stage vectors (ny; g: scratch of the solve and
+                                            * the spectral radius); r: (na_max) */
     double *ft;               /* (ny) df/dt at the Jacobian's point (rodas4 only) */
     double gam;               /* the bound method's diagonal gamma (cd_rosw_bind) */
     double fd_eps_plain;      /* cd_rosw_init_plain: the difference increment (no model) */
@@ -53,7 +54,7 @@ typedef struct {
     double *tu;               /* (na_max) */
     double *sv;               /* (na_max^2 / 2) nonzeros of J_U,PZ then J_PZ,U (reduce()) */
     int *sp, *sc;             /* their row starts (2 na_max + 2) and columns */
-    int nrun, *rlo, *rhi;     /* (ny + 2 each) the runs of unknowns that can move (rosw.c, move_runs) */
+    int nrun, *rlo, *rhi;     /* (ny + 2 each) the runs of unknowns that can move (cd_moving_runs) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
