@@ -379,22 +379,31 @@ int cd_rosw_lu_decomp(double *A, int n, int *piv)
     return 0;
 }
 
+/* The two triangular solves column by column: once b_j is final it is taken
+ * out of every later (forward) or earlier (backward) entry. The updates of
+ * different entries do not depend on each other, so they overlap in the
+ * processor, where the row-by-row dot products were one chain of dependent
+ * subtractions each (the solve was 13 % of the capture twin's time, 8 %
+ * after this). The forward sweep subtracts in the dot product's order (j
+ * ascending), bit for bit; the backward sweep in the reverse order (j
+ * descending), which rounds differently. (Storing the factors by columns,
+ * so that these sweeps run along contiguous memory, measured no faster on
+ * the two MuJoCo twins.) */
 void cd_rosw_lu_solve(const double *A, int n, const int *piv, double *b)
 {
     int i, j;
     for (i = 0; i < n; i++)
         if (piv[i] != i) { double t = b[i]; b[i] = b[piv[i]]; b[piv[i]] = t; }
-    for (i = 1; i < n; i++) {
-        const double *ri = A + (size_t)i * n;
-        double s = b[i];
-        for (j = 0; j < i; j++) s -= ri[j] * b[j];
-        b[i] = s;
+    for (j = 0; j < n - 1; j++) {
+        const double *cj = A + j, bj = b[j];
+        if (bj != 0)
+            for (i = j + 1; i < n; i++) b[i] -= cj[(size_t)i * n] * bj;
     }
-    for (i = n - 1; i >= 0; i--) {
-        const double *ri = A + (size_t)i * n;
-        double s = b[i];
-        for (j = i + 1; j < n; j++) s -= ri[j] * b[j];
-        b[i] = s / ri[i];
+    for (j = n - 1; j >= 0; j--) {
+        const double *cj = A + j, bj = b[j] / cj[(size_t)j * n];
+        b[j] = bj;
+        if (bj != 0)
+            for (i = 0; i < j; i++) b[i] -= cj[(size_t)i * n] * bj;
     }
 }
 
