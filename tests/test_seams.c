@@ -390,11 +390,12 @@ Test(seams, restored_state_continues_bit_identically)
 {
     /* Save at t1 (after the drop's onset), run on to t2; restore into a new
      * data, run to t2: bit-identical y, modes and events, for every stepper
-     * (issue 7 names rkf45, rk8pd, rk4 and msbdf). */
-    cd_stepper s[7] = {CD_STEP_RKF45, CD_STEP_RKCK,  CD_STEP_RK8PD,   CD_STEP_RK4_FIXED,
-                       CD_STEP_MSBDF, CD_STEP_RK4IMP, CD_STEP_ROS34PW2};
+     * (issue 7 names rkf45, rk8pd, rk4 and msbdf; auto, the default, keeps
+     * its stepper, check interval and measured cost window in the state). */
+    cd_stepper s[8] = {CD_STEP_RKF45, CD_STEP_RKCK,   CD_STEP_RK8PD,    CD_STEP_RK4_FIXED,
+                       CD_STEP_MSBDF, CD_STEP_RK4IMP, CD_STEP_ROS34PW2, CD_STEP_AUTO};
     int i;
-    for (i = 0; i < 7; i++) {
+    for (i = 0; i < 8; i++) {
         cd_model *m = slide_scene(s[i]);
         cd_data *a = mk(m), *b = mk(m);
         cd_error e;

@@ -53,18 +53,34 @@
 #include <string.h>
 
 /* auto (CD_STEP_AUTO): a stiffness check runs every auto_every accepted
- * steps (CD_AUTO_EVERY, doubled up to CD_AUTO_EVERY_MAX while switches come
- * within 5 checks of each other, so a problem on the border does not
- * thrash). With rho the spectral radius of the Jacobian and h the step the
- * stepper works at, rk8pd is stability-capped near h rho ~ 5 (its region
- * reaches about 5 on the real and imaginary axes): at h rho > CD_AUTO_STIFF
- * it works at that cap. The choice is on cost: an rk8pd step costs 12-13
- * evaluations, a ros34pw2 step 4 plus its linear algebra, about
- * CD_AUTO_COST_RATIO times less. So
+ * steps (CD_AUTO_EVERY, doubled up to CD_AUTO_EVERY_MAX after a switch that
+ * was measured to be a mistake, below). With rho the spectral radius of the
+ * Jacobian and h the step the stepper works at, rk8pd is stability-capped
+ * near h rho ~ 5 (its region reaches about 5 on the real and imaginary
+ * axes): at h rho > CD_AUTO_STIFF it works at that cap. The choice is on
+ * cost: an rk8pd step costs 12-13 evaluations, a ros34pw2 step 4 plus its
+ * linear algebra, about CD_AUTO_COST_RATIO times less. So
  *   rk8pd -> ros34pw2 when h rho > CD_AUTO_STIFF;
  *   ros34pw2 -> rk8pd when rk8pd could take min(h_max, CD_AUTO_STIFF / rho)
  *            > CD_AUTO_COST_RATIO h.
- * Two consecutive checks must agree. */
+ * Two consecutive checks must agree.
+ *
+ * The model guesses ros34pw2's step, which accuracy may hold far below what
+ * its stability allows (order 3 at a tight tolerance), so the cost is also
+ * measured: the evaluations per simulated second over the steps between two
+ * checks (a window, its events included). On ros34pw2, a window (not the
+ * first after the switch) costlier than rk8pd's last one before the switch
+ * is a check that asks for rk8pd. At every switch the stepper given up is
+ * compared, in its last window, with the other stepper's last window before
+ * it was given up: if it cost more, the round trip was a mistake, whichever
+ * rule asked for it, and the interval doubles; otherwise it goes back to
+ * CD_AUTO_EVERY. (The interval used to double at every switch that came
+ * within 5 checks of the one before. Many such switches are right: an
+ * impact's transient, which both steppers resolve with short steps and
+ * rk8pd with fewer evaluations, hands over to rk8pd, and once it has
+ * decayed rk8pd works at its stability cap and must hand back soon; the
+ * doubled interval kept the Fig. 5 grasp on rk8pd at its cap for 0.16 s, at
+ * 13 evaluations per 0.2 ms.) */
 #define CD_AUTO_EVERY 10
 #define CD_AUTO_EVERY_MAX 320
 #define CD_AUTO_STIFF 2.5
@@ -129,8 +145,13 @@ typedef struct {
     int loc_nsub;             /* rk4imp, msbdf: the locator's sub-steps over the step an event is located in */
     double loc_hsub;          /* ... and their length (0: one locator step per trial) */
     long auto_next;           /* accepted steps until the next stiffness check */
-    long auto_every;          /* steps between checks (doubled while the switches come fast) */
+    long auto_every;          /* steps between checks (doubled after a switch measured to be a mistake) */
     long auto_since;          /* accepted steps since the last switch */
+    double auto_tc;           /* auto: start of the check window (the last check or switch) [s] */
+    double auto_ec;           /* auto: evaluations in the window (whole number) */
+    double auto_rate_exp;     /* auto: rk8pd's evaluations per simulated second in its last window before
+                               * the switch to ros34pw2 (0: none measured) */
+    double auto_rate_imp;     /* auto: ros34pw2's in its last window before the switch to rk8pd (0: none) */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
@@ -288,6 +309,10 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     I->auto_next = 0;
     I->auto_every = CD_AUTO_EVERY;
     I->auto_since = 0;
+    I->auto_tc = d->t;
+    I->auto_ec = 0;
+    I->auto_rate_exp = 0;
+    I->auto_rate_imp = 0;
     I->have_end = 0;
     I->fsal = 0;
     I->restart_pending = 0;
@@ -882,6 +907,9 @@ static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
     I->stiff = to_stiff;
     I->auto_hits = 0;
     I->auto_since = 0;
+    I->auto_tc = d->t;
+    I->auto_ec = 0;
+    if (!to_stiff || !(rho >= 0)) I->auto_rate_exp = 0; /* (auto_check sets it; a forced switch measured nothing) */
     gsl_odeiv2_evolve_reset(I->drv->e);
     gsl_odeiv2_step_reset(I->drv->s);
     gsl_odeiv2_step_reset(I->s_stiff);
@@ -896,13 +924,18 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
     /* the step the stepper works at: the last one, or its proposal for the
      * next if larger (a step clipped by a sample, breakpoint or event is not
      * the stepper's choice) */
-    double rho, h = d->stats.h_last > I->h ? d->stats.h_last : I->h, hmax = d->opt.h_max, reach;
-    int want;
+    double rho, h = d->stats.h_last > I->h ? d->stats.h_last : I->h, hmax = d->opt.h_max, reach, win, rate;
+    int want, costly = 0;
     (void)m;
     I->auto_since++;
     if (--I->auto_next > 0) return;
     if (I->auto_every < CD_AUTO_EVERY) I->auto_every = CD_AUTO_EVERY;
     I->auto_next = I->auto_every;
+    /* the window's evaluations per simulated second; a new window starts */
+    win = d->t - I->auto_tc;
+    rate = win > 0 ? I->auto_ec / win : HUGE_VAL;
+    I->auto_tc = d->t;
+    I->auto_ec = 0;
     rho = cd_rosw_spectral_radius(&I->rw, d->t, d->y);
     if (!(rho >= 0)) return;
     if (!I->stiff) {
@@ -911,14 +944,24 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
         reach = rho > 0 ? CD_AUTO_STIFF / rho : HUGE_VAL;
         if (hmax > 0 && reach > hmax) reach = hmax;
         want = reach > CD_AUTO_COST_RATIO * h;
+        /* measured: a whole window after the switch's own costlier than rk8pd's before it */
+        if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp)
+            want = costly = 1;
     }
     if (!want) { I->auto_hits = 0; return; }
     if (++I->auto_hits >= 2) {
-        /* switches in quick succession: check less often */
-        if (I->auto_since < 5 * I->auto_every) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
+        const int to_stiff = !I->stiff;
+        /* the stepper given up was measured costlier than the one taken
+         * back, in its window before it was given up: the round trip was a
+         * mistake, whichever rule asked for it; check less often */
+        if (to_stiff) costly = I->auto_rate_imp > 0 && rate > I->auto_rate_imp;
+        else costly = costly || (I->auto_rate_exp > 0 && rate > I->auto_rate_exp);
+        if (costly) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
         else I->auto_every = CD_AUTO_EVERY;
         I->auto_next = I->auto_every;
-        auto_switch(d, I, !I->stiff, rho);
+        I->auto_rate_exp = to_stiff && rate < HUGE_VAL ? rate : 0;
+        I->auto_rate_imp = !to_stiff && rate < HUGE_VAL ? rate : 0;
+        auto_switch(d, I, to_stiff, rho);
     }
 }
 
@@ -1137,6 +1180,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
     *started = 1;
     while (d->t < t_end) {
         double t0 = d->t, t1 = t_end, tdw, tbr, g1;
+        const long nrhs0 = d->stats.nrhs; /* auto: this step's evaluations, its event's included */
         int status, at_dwell_end, at_break;
         /* a schedule breakpoint reached (rows, waypoints, clutch schedules):
          * new rows, restart, re-check the modes */
@@ -1279,6 +1323,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
         }
         if (I->autom) {
             if (I->stiff) d->stats.t_stiff += d->stats.h_last;
+            I->auto_ec += (double)(d->stats.nrhs - nrhs0);
             auto_check(m, d, I);
         }
         if (!I->fixed && I->h < d->opt.h_min && d->t < t_end) {
@@ -1359,7 +1404,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 }
 
 /* ---- the integrator's part of the complete state ------------------------------ */
-#define INTEG_FIXED_WORDS 15
+#define INTEG_FIXED_WORDS 19
 
 int cd_integ_state_size(const cd_model *m)
 {
@@ -1376,6 +1421,7 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     b[5] = I->have_end; b[6] = I->fsal; b[7] = I->restart_pending; b[8] = I->rtol_set; b[9] = I->atol_set;
     b[10] = I->stiff; b[11] = I->auto_hits; b[12] = (double)I->auto_next;
     b[13] = (double)I->auto_every; b[14] = (double)I->auto_since;
+    b[15] = I->auto_tc; b[16] = I->auto_ec; b[17] = I->auto_rate_exp; b[18] = I->auto_rate_imp;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
@@ -1389,19 +1435,24 @@ int cd_integ_state_check(const cd_model *m, const double *b, char *why, size_t l
                                                        "FSAL flag", "restart flag", "rtol", "atol",
                                                        "auto stepper flag", "auto check agreements",
                                                        "auto steps to the next check", "auto check interval",
-                                                       "auto steps since the last switch"};
+                                                       "auto steps since the last switch", "auto check window start",
+                                                       "auto evaluations in the window", "auto rk8pd cost rate",
+                                                       "auto ros34pw2 cost rate"};
     int i, n = cd_integ_state_size(m);
     for (i = 0; i < INTEG_FIXED_WORDS; i++) {
         double v = b[i];
         int ok = isfinite(v);
-        if (ok && (i == 0 || i == 3 || i >= 8)) ok = v >= 0; /* h, step, tolerances */
-        if (ok && i == 4) ok = v >= 0 && v <= 9007199254740992.0 && v == floor(v);
-        if (ok && ((i >= 5 && i <= 7) || i == 10)) ok = v == 0 || v == 1;
-        if (ok && i >= 11) ok = v >= 0 && v <= 9007199254740992.0 && v == floor(v);
+        /* kinds: a finite number (end time, cd_step origin, window start), 0 or 1
+         * (flags), a whole number >= 0 (counts), else a finite number >= 0 */
+        const int any = i == 1 || i == 2 || i == 15, flag = (i >= 5 && i <= 7) || i == 10,
+                  whole = i == 4 || (i >= 11 && i <= 14) || i == 16;
+        if (ok && !any) ok = v >= 0;
+        if (ok && whole) ok = v <= 9007199254740992.0 && v == floor(v);
+        if (ok && flag) ok = v == 0 || v == 1;
         if (!ok) {
             snprintf(why, len, "the integrator's %s is %.17g (%s)", fixed[i], v,
-                     i == 4 || i >= 11 ? "expected a whole number >= 0" : (i >= 5 && i <= 7) || i == 10 ? "expected 0 or 1"
-                     : i == 1 || i == 2 ? "expected a finite number" : "expected a finite number >= 0");
+                     whole ? "expected a whole number >= 0" : flag ? "expected 0 or 1"
+                     : any ? "expected a finite number" : "expected a finite number >= 0");
             return -1;
         }
     }
@@ -1422,6 +1473,7 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     I->have_end = (int)b[5]; I->fsal = (int)b[6]; I->restart_pending = (int)b[7];
     I->stiff = I->autom && b[10] != 0; I->auto_hits = (int)b[11]; I->auto_next = (long)b[12];
     I->auto_every = (long)b[13]; I->auto_since = (long)b[14];
+    I->auto_tc = b[15]; I->auto_ec = b[16]; I->auto_rate_exp = b[17]; I->auto_rate_imp = b[18];
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
     memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
     /* callbacks are this process's: the restored data keeps its own, unchanged */
