@@ -166,6 +166,21 @@ static void vpow(double r[3], const double a[3], double K, double p)
     cd_v3_scale(r, a, n > 0 ? K * pow(n, p - 1.0) : 0.0);
 }
 
+/* The free sphere free_sp (cd_data.slot_free: centre and radius in the
+ * shape's frame) of a check point of radius r at pl (shape frame): 1 when
+ * pl is inside it by more than r, with *x = r minus the bound of the
+ * distance it gives (the signed distance is 1-Lipschitz, so dist(pl) >= its
+ * radius minus how far pl is from its centre); 0 otherwise. */
+static int inside_free(const double free_sp[4], const double pl[3], double r, double *x)
+{
+    double t[3], lb;
+    cd_v3_sub(t, pl, free_sp);
+    lb = free_sp[3] - cd_v3_norm(t);
+    if (!(lb > r + CD_BROAD_MARGIN)) return 0;
+    *x = r - lb;
+    return 1;
+}
+
 /* Geometry of slot k at the evaluated pose: the check point's centre pw,
  * the penetration x, the normal n and the surface point s (world). An open
  * slot beyond the shape's bounding sphere gets the sphere's gap (far_open;
@@ -186,18 +201,8 @@ static int slot_geometry(const cd_model *m, const cd_data *d, int k, int open, i
         return 0;
     }
     to_shape(d, sh, pw, pl);
-    if (free_sp && free_sp[3] > r + CD_BROAD_MARGIN) {
-        /* the free sphere of an earlier evaluation (cd_data.slot_free): the
-         * signed distance is 1-Lipschitz, so dist(pl) >= its radius minus
-         * how far pl is from its centre */
-        double t[3], lb;
-        cd_v3_sub(t, pl, free_sp);
-        lb = free_sp[3] - cd_v3_norm(t);
-        if (lb > r + CD_BROAD_MARGIN) {
-            *x = r - lb;
-            return 0;
-        }
-    }
+    /* the free sphere of an earlier evaluation */
+    if (free_sp && free_sp[3] > r + CD_BROAD_MARGIN && inside_free(free_sp, pl, r, x)) return 0;
     if ((res = query_local(m, d, sh, pl, open ? r + CD_BROAD_MARGIN : HUGE_VAL, &dist, n, s)) == 1) res = 0;
     if (res == 0) {
         *x = r - dist;
@@ -227,14 +232,9 @@ static int open_apart(const cd_model *m, const cd_data *d, int k, const double *
         return 1;
     }
     if (free_sp && free_sp[3] > r + CD_BROAD_MARGIN) {
-        double pl[3], t[3], lb;
+        double pl[3];
         to_shape(d, sh, pw, pl);
-        cd_v3_sub(t, pl, free_sp);
-        lb = free_sp[3] - cd_v3_norm(t);
-        if (lb > r + CD_BROAD_MARGIN) {
-            *x = r - lb;
-            return 1;
-        }
+        return inside_free(free_sp, pl, r, x);
     }
     return 0;
 }

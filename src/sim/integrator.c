@@ -909,7 +909,7 @@ static void auto_switch(cd_data *d, cd_integ *I, int to_stiff, double rho)
     I->auto_since = 0;
     I->auto_tc = d->t;
     I->auto_ec = 0;
-    if (!to_stiff || !(rho >= 0)) I->auto_rate_exp = 0; /* (auto_check sets it; a forced switch measured nothing) */
+    if (!(rho >= 0)) I->auto_rate_exp = 0; /* a forced switch measured nothing (auto_check sets the rates) */
     gsl_odeiv2_evolve_reset(I->drv->e);
     gsl_odeiv2_step_reset(I->drv->s);
     gsl_odeiv2_step_reset(I->s_stiff);
@@ -925,7 +925,7 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
      * next if larger (a step clipped by a sample, breakpoint or event is not
      * the stepper's choice) */
     double rho, h = d->stats.h_last > I->h ? d->stats.h_last : I->h, hmax = d->opt.h_max, reach, win, rate;
-    int want, costly = 0;
+    int want;
     (void)m;
     I->auto_since++;
     if (--I->auto_next > 0) return;
@@ -945,8 +945,7 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
         if (hmax > 0 && reach > hmax) reach = hmax;
         want = reach > CD_AUTO_COST_RATIO * h;
         /* measured: a whole window after the switch's own costlier than rk8pd's before it */
-        if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp)
-            want = costly = 1;
+        if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp) want = 1;
     }
     if (!want) { I->auto_hits = 0; return; }
     if (++I->auto_hits >= 2) {
@@ -954,9 +953,8 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
         /* the stepper given up was measured costlier than the one taken
          * back, in its window before it was given up: the round trip was a
          * mistake, whichever rule asked for it; check less often */
-        if (to_stiff) costly = I->auto_rate_imp > 0 && rate > I->auto_rate_imp;
-        else costly = costly || (I->auto_rate_exp > 0 && rate > I->auto_rate_exp);
-        if (costly) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
+        const double back = to_stiff ? I->auto_rate_imp : I->auto_rate_exp;
+        if (back > 0 && rate > back) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
         else I->auto_every = CD_AUTO_EVERY;
         I->auto_next = I->auto_every;
         I->auto_rate_exp = to_stiff && rate < HUGE_VAL ? rate : 0;
