@@ -1,7 +1,7 @@
 /* Shared by the stepper suites (test_ros4.c, test_gauss4.c): a smooth
  * non-autonomous nonlinear system with a known solution for measuring a
- * stepper's order, a very stiff linear one, and the Fig. 5 grasp run to compare a stepper with a tight
- * rk8pd reference. */
+ * stepper's order, a very stiff linear one, and a scenario run (the Fig. 5 grasp's to compare a
+ * stepper with a tight rk8pd reference; test_auto.c's to compare auto with its two steppers). */
 #ifndef CAPDYN_TESTS_STEPPER_UTIL_H
 #define CAPDYN_TESTS_STEPPER_UTIL_H
 
@@ -86,32 +86,38 @@ static inline int zero_j(double t, const double y[], double *J, double dfdt[], v
     return GSL_SUCCESS;
 }
 
-/* What a Fig. 5 run ends with: every system's coordinates, the slot modes,
- * the counts, the events by kind. */
+/* What a scenario run ends with: every system's coordinates, the slot
+ * modes, the counts, the events by kind, auto's switches. */
 typedef struct {
     double q[256];
     int modes[256], nq, ns;
-    long nrhs, njac, nev, nsteps, kinds[8];
+    long nrhs, njac, nev, nsteps, kinds[8], nsw_stiff, nsw_explicit;
 } outcome;
 
-/* The Fig. 5 envelope grasp to t_end with the overrides integ and rtol (and
- * h_max 0.05) */
-static inline void run_fig5(const char *integ, const char *rtol, double t_end, outcome *o)
+/* scenarios/<file> with the overrides ov[0..nov), its control installed if
+ * it has one, run to t_end (<= 0: the scenario's duration) */
+static inline void run_scenario(const char *file, const char **ov, int nov, double t_end, outcome *o)
 {
     char path[1024];
-    const char *ov[3] = {integ, rtol, "simulation.h_max=0.05"};
     cd_error e;
     cd_scenario *sc;
     cd_data *d;
+    cd_ctrl *ctl = NULL;
     const cd_model *m;
     int i, s;
-    snprintf(path, sizeof path, "%s/scenarios/paper_fig5_envelope_grasp.toml", step_root());
-    sc = cd_scenario_load(path, ov, 3, &e);
-    cr_assert(sc, "%s", e.msg);
+    snprintf(path, sizeof path, "%s/scenarios/%s", step_root(), file);
+    sc = cd_scenario_load(path, ov, nov, &e);
+    cr_assert(sc, "%s: %s", file, e.msg);
     m = sc->model;
     d = cd_data_create(m, sc->event_capacity, &e);
     cr_assert(d, "%s", e.msg);
-    cr_assert_eq(cd_sim_advance(m, d, t_end, NULL, NULL, &e), CD_OK, "%s: %s", integ, e.msg);
+    if (sc->control) {
+        ctl = cd_ctrl_create(m, sc->control, &e);
+        cr_assert(ctl, "%s", e.msg);
+        cd_ctrl_install(ctl, d);
+    }
+    if (!(t_end > 0)) t_end = sc->duration;
+    cr_assert_eq(cd_sim_advance(m, d, t_end, NULL, NULL, &e), CD_OK, "%s with %s: %s", file, nov ? ov[0] : "", e.msg);
     memset(o, 0, sizeof *o);
     for (s = 0; s < m->nsys; s++) { /* the coordinates of every system (positions, quaternions, joints) */
         int ya = m->sys_y_adr[s], nj = m->sys_nbody[s] - 1;
@@ -128,8 +134,19 @@ static inline void run_fig5(const char *integ, const char *rtol, double t_end, o
     o->njac = d->stats.njac;
     o->nev = d->stats.nevents;
     o->nsteps = d->stats.nsteps;
+    o->nsw_stiff = d->stats.nswitch_stiff;
+    o->nsw_explicit = d->stats.nswitch_explicit;
+    cd_ctrl_free(ctl);
     cd_data_free(d);
     cd_scenario_free(sc);
+}
+
+/* The Fig. 5 envelope grasp to t_end with the overrides integ and rtol (and
+ * h_max 0.05) */
+static inline void run_fig5(const char *integ, const char *rtol, double t_end, outcome *o)
+{
+    const char *ov[3] = {integ, rtol, "simulation.h_max=0.05"};
+    run_scenario("paper_fig5_envelope_grasp.toml", ov, 3, t_end, o);
 }
 
 #endif

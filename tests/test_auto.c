@@ -26,58 +26,33 @@
 
 #include "stepper_util.h"
 
-typedef struct {
-    long nrhs, nevents, nsw_stiff, nsw_explicit;
-} auto_run;
-
-static auto_run run(const char *scen, const char *integrator, const char **extra, int nextra)
+/* scen with simulation.integrator = integrator and the overrides extra */
+static void run(const char *scen, const char *integrator, const char **extra, int nextra, outcome *o)
 {
-    char path[1024], integ[64];
+    char integ[64];
     const char *sets[8];
     int n = 0, i;
-    cd_error e;
-    cd_scenario *sc;
-    cd_data *d;
-    cd_ctrl *ctl = NULL;
-    cd_status st;
-    auto_run r;
-    snprintf(path, sizeof path, "%s/scenarios/%s", step_root(), scen);
     snprintf(integ, sizeof integ, "simulation.integrator=\"%s\"", integrator);
     sets[n++] = integ;
     for (i = 0; i < nextra && n < 8; i++) sets[n++] = extra[i];
-    sc = cd_scenario_load(path, sets, n, &e);
-    cr_assert(sc, "%s: %s", scen, e.msg);
-    d = cd_data_create(sc->model, sc->event_capacity, &e);
-    cr_assert(d, "%s", e.msg);
-    if (sc->control) {
-        ctl = cd_ctrl_create(sc->model, sc->control, &e);
-        cr_assert(ctl, "%s", e.msg);
-        cd_ctrl_install(ctl, d);
-    }
-    st = cd_sim_advance(sc->model, d, sc->duration, NULL, NULL, &e);
-    cr_assert_eq(st, CD_OK, "%s with %s: %s", scen, integrator, e.msg);
-    r.nrhs = d->stats.nrhs;
-    r.nevents = d->stats.nevents;
-    r.nsw_stiff = d->stats.nswitch_stiff;
-    r.nsw_explicit = d->stats.nswitch_explicit;
-    cd_ctrl_free(ctl);
-    cd_data_free(d);
-    cd_scenario_free(sc);
-    return r;
+    run_scenario(scen, sets, n, 0.0, o);
 }
 
 static void auto_vs_both(const char *scen, const char **extra, int nextra, int same_events)
 {
-    auto_run a = run(scen, "auto", extra, nextra), x = run(scen, "rk8pd", extra, nextra),
-             s = run(scen, "ros34pw2", extra, nextra);
-    long best = x.nrhs < s.nrhs ? x.nrhs : s.nrhs;
+    static outcome a, x, s; /* (large: not on the stack) */
+    long best;
+    run(scen, "auto", extra, nextra, &a);
+    run(scen, "rk8pd", extra, nextra, &x);
+    run(scen, "ros34pw2", extra, nextra, &s);
+    best = x.nrhs < s.nrhs ? x.nrhs : s.nrhs;
     cr_log_info("%s: evaluations auto %ld (%ld switches to ros34pw2, %ld back), rk8pd %ld, ros34pw2 %ld; "
                 "auto / cheaper %.3f",
                 scen, a.nrhs, a.nsw_stiff, a.nsw_explicit, x.nrhs, s.nrhs, (double)a.nrhs / (double)best);
-    cr_log_info("%s: events auto %ld, rk8pd %ld, ros34pw2 %ld", scen, a.nevents, x.nevents, s.nevents);
+    cr_log_info("%s: events auto %ld, rk8pd %ld, ros34pw2 %ld", scen, a.nev, x.nev, s.nev);
     if (same_events) {
-        cr_expect_eq(a.nevents, x.nevents, "%s: auto located %ld events, rk8pd %ld", scen, a.nevents, x.nevents);
-        cr_expect_eq(a.nevents, s.nevents, "%s: auto located %ld events, ros34pw2 %ld", scen, a.nevents, s.nevents);
+        cr_expect_eq(a.nev, x.nev, "%s: auto located %ld events, rk8pd %ld", scen, a.nev, x.nev);
+        cr_expect_eq(a.nev, s.nev, "%s: auto located %ld events, ros34pw2 %ld", scen, a.nev, s.nev);
     }
     cr_expect_gt(a.nsw_stiff, 0, "%s: auto never took ros34pw2 on", scen);
     cr_expect_leq((double)a.nrhs, 1.1 * (double)best,
