@@ -123,7 +123,7 @@ static size_t buf_size(size_t n, size_t na)
 {
     return 16 + (3 * na * na + 12 * n + 2 * na) * sizeof(double) + na * (sizeof(size_t) + 4 * sizeof(int)) + 16 +
            (na * na / 2 + 1) * (sizeof(double) + sizeof(int)) + (2 * na + 2) * sizeof(int) + 16 +
-           2 * (n + 2) * sizeof(int);
+           2 * (n + 2) * sizeof(int) + 2 * na * sizeof(int);
 }
 
 size_t cd_rosw_size(const cd_model *m)
@@ -158,7 +158,9 @@ static int *carve(cd_rosw *w, double *p, size_t n, size_t na)
     w->sc = w->sp + 2 * na + 2;
     w->rlo = w->sc + na * na / 2 + 1;
     w->rhi = w->rlo + n + 2;
-    return w->rhi + n + 2;
+    w->jlo = w->rhi + n + 2;
+    w->jhi = w->jlo + na;
+    return w->jhi + na;
 }
 
 void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem)
@@ -630,6 +632,19 @@ double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y)
     }
     na = w->na;
     if (na == 0) return 0.0;
+    /* each row's nonzeros lie in [jlo, jhi): the rows of the positions and
+     * anchors hold a few velocities' columns (reduce()), so the products
+     * below skip most of J. Bit for bit the dense sums: a skipped term is a
+     * zero times a finite v (a non-finite one ends the iteration), and the
+     * sum it is left out of is never -0 */
+    for (i = 0; i < na; i++) {
+        const double *Ji = w->J + (size_t)i * (size_t)na;
+        int a = 0, b = na;
+        while (a < na && Ji[a] == 0) a++;
+        while (b > a && Ji[b - 1] == 0) b--;
+        w->jlo[i] = a;
+        w->jhi[i] = b;
+    }
     /* power iteration: rho ~ (|J^20 v| / |J^10 v|)^(1/10), which also
      * converges for a complex pair and damps the transient of a non-normal J */
     for (i = 0; i < na; i++) v[i] = 1.0 / (double)(1 + i % 7);
@@ -640,8 +655,8 @@ double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y)
         for (i = 0; i < na; i++) {
             const double *Ji = w->J + (size_t)i * (size_t)na;
             double acc = 0;
-            int c;
-            for (c = 0; c < na; c++) acc += Ji[c] * v[c];
+            int c, c1 = w->jhi[i];
+            for (c = w->jlo[i]; c < c1; c++) acc += Ji[c] * v[c];
             u[i] = acc / nv;
         }
         for (i = 0; i < na; i++) nu += u[i] * u[i];

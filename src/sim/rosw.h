@@ -55,6 +55,8 @@ typedef struct {
     double *sv;               /* (na_max^2 / 2) nonzeros of J_U,PZ then J_PZ,U (reduce()) */
     int *sp, *sc;             /* their row starts (2 na_max + 2) and columns */
     int nrun, *rlo, *rhi;     /* (ny + 2 each) the runs of unknowns that can move (cd_moving_runs) */
+    int *jlo, *jhi;           /* (na_max each) each row's first and one past its last nonzero in J
+                               * (cd_rosw_spectral_radius) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
