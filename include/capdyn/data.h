@@ -201,6 +201,11 @@ typedef struct cd_data {
                              evaluation (a free sphere: any check-point centre closer to that point
                              than the bound minus r is apart); zeroed by cd_data_reset and
                              cd_state_set; a radius <= 0 holds nothing */
+    double *group_near;   /* (ngroup x 4) broad-phase cache of slot groups: a point of the shape's frame
+                             and the distance to the shape an earlier query found there, within its
+                             cut-off (a near sphere: a group centre close enough to it cannot be apart,
+                             and the group's query is skipped); HUGE_VAL holds nothing; reset with
+                             slot_free */
     int *slot_held;       /* (nslot) 1 while the chattering guard suspends the slot's switches
                              (= sw_held): its forces are then clipped to f_n >= 0 and |f_t| <= mu_max f_n */
 

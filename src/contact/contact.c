@@ -72,7 +72,9 @@ static void to_shape(const cd_data *d, int sh, const double pw[3], double pl[3])
     cd_m3_tmulv(pl, d->shape_R + 9 * sh, t);
 }
 
-/* query_world with the point already in the shape frame (pl) */
+/* The shape's query at a point pl of its frame (n, s in world); returns 0
+ * (exact), 1 (a hull's plane bound beyond `beyond`, see shape_query) or -1
+ * for a rejected answer */
 static int query_local(const cd_model *m, const cd_data *d, int sh, const double pl[3], double beyond,
                        double *dist, double n[3], double s[3])
 {
@@ -87,15 +89,6 @@ static int query_local(const cd_model *m, const cd_data *d, int sh, const double
     return res;
 }
 
-/* query in world coordinates (n, s in world); returns 0 (exact), 1 (a hull's
- * plane bound beyond `beyond`, see shape_query) or -1 for a rejected answer */
-static int query_world(const cd_model *m, const cd_data *d, int sh, const double pw[3], double beyond,
-                       double *dist, double n[3], double s[3])
-{
-    double pl[3];
-    to_shape(d, sh, pw, pl);
-    return query_local(m, d, sh, pl, beyond, dist, n, s);
-}
 
 /* Broad phase of an OPEN slot: a check point (radius r) farther than
  * CD_BROAD_MARGIN from the shape's bounding sphere cannot touch it, so the
@@ -320,14 +313,30 @@ void cd_contact_complete(const cd_model *m, cd_data *d)
  * the members' offsets). */
 static int group_apart(const cd_model *m, const cd_data *d, int g, double *xb)
 {
-    int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1;
-    double cw[3], R = m->group_radius[g], dist, n[3], s[3];
+    int k0 = m->group_adr[g], sh = m->slot_shape[k0], single = m->group_num[g] == 1, res;
+    double cw[3], cl[3], R = m->group_radius[g], dist, n[3], s[3];
+    double *near = d->group_near + 4 * g;
     cd_body_point(d, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw);
     if (far_open(m, d, sh, cw[0], cw[1], cw[2], R, &dist, NULL, NULL) == 1) {
         *xb = R - dist;
         return 1;
     }
-    if (query_world(m, d, sh, cw, R + CD_BROAD_MARGIN, &dist, n, s) < 0) return 0;
+    to_shape(d, sh, cw, cl);
+    /* the near sphere of an earlier query: the signed distance is
+     * 1-Lipschitz, so here it is at most that query's distance plus how far
+     * the centre moved; below R - CD_BROAD_MARGIN the query would find the
+     * group not apart (dist <= R), a margin of a micrometre over its
+     * rounding: the per-slot tests follow without it */
+    if (near[3] < R - CD_BROAD_MARGIN) {
+        double t[3];
+        cd_v3_sub(t, cl, near);
+        if (near[3] + cd_v3_norm(t) < R - CD_BROAD_MARGIN) return 0;
+    }
+    res = query_local(m, d, sh, cl, R + CD_BROAD_MARGIN, &dist, n, s);
+    /* kept only when exact (res 0) and within the query's cut-off */
+    near[3] = res == 0 && dist <= R + CD_BROAD_MARGIN ? dist : HUGE_VAL;
+    if (res < 0) return 0;
+    cd_v3_copy(near, cl);
     *xb = R - dist;
     return single ? *xb < 0 : *xb < -CD_BROAD_MARGIN;
 }

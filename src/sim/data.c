@@ -9,6 +9,7 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <math.h>
 #include <string.h>
 
 static void *std_alloc(size_t n, void *ctx) { (void)ctx; return malloc(n); }
@@ -65,7 +66,7 @@ static size_t carve(const cd_model *m, cd_data *d, char *base, int maxdof)
     CARVE(slot_mode, ns); CARVE(slot_dir, 3 * ns); CARVE(slot_x, ns);
     CARVE(slot_xdot, ns); CARVE(slot_fn, ns); CARVE(slot_ft, 3 * ns); CARVE(slot_point, 3 * ns);
     CARVE(slot_normal, 3 * ns); CARVE(slot_vt, 3 * ns); CARVE(slot_va, 3 * ns); CARVE(slot_fnraw, ns);
-    CARVE(slot_geomfail, ns); CARVE(slot_far, ns); CARVE(slot_free, 4 * ns);
+    CARVE(slot_geomfail, ns); CARVE(slot_far, ns); CARVE(slot_free, 4 * ns); CARVE(group_near, 4 * m->ngroup);
     CARVE(shape_R, 9 * m->nshape); CARVE(shape_xw, 3 * m->nshape);
     CARVE(lim_mode, m->nlim); CARVE(lim_depth, m->nlim); CARVE(lim_force, m->nlim); CARVE(lim_raw, m->nlim);
     CARVE(fric_mode, m->nfric); CARVE(fric_dir, m->nfric); CARVE(fric_force, m->nfric);
@@ -195,6 +196,7 @@ cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
         cd_v3_zero(d->slot_dir + 3 * k);
     }
     memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double)); /* no free sphere yet */
+    for (k = 0; k < m->ngroup; k++) d->group_near[4 * k + 3] = HUGE_VAL; /* no near sphere yet */
     for (k = 0; k < m->nlim; k++) d->lim_mode[k] = CD_LIM_FREE;
     for (k = 0; k < m->nfric; k++) {
         d->fric_mode[k] = CD_MODE_STICK;

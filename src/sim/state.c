@@ -208,6 +208,10 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
     p = set_body(m, d, buf + HEADER);
     /* the broad phase's free spheres start afresh, as in a fresh data */
     memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double));
+    {
+        int g;
+        for (g = 0; g < m->ngroup; g++) d->group_near[4 * g + 3] = HUGE_VAL;
+    }
     if (cd_forward(m, d) != CD_OK) {
         double t = d->t;
         (void)set_body(m, d, undo);
