@@ -124,7 +124,7 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
      * the derivative, every slot output (through cd_contact_slot_outputs)
      * and both switching functions are bit-identical. Then, with a third of
      * the slots closed (stick or slip), none of those is skipped either. */
-    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0, nleft = 0, nfree = 0;
+    int probe, pose, k, nskip = 0, ntouch = 0, nfar_bound = 0, nleft = 0, nfree = 0, nnear = 0;
     cd_model *m = scene(&probe);
     cd_error e;
     cd_data *d1 = cd_data_create(m, 0, &e), *d0;
@@ -237,6 +237,34 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
                 }
             }
         }
+        {
+            /* the groups' near spheres: each holds the exact distance at its centre, and where the
+             * evaluation skips a group's query by it (the distance bound below R - 1e-6 m) the exact
+             * query at the group's centre finds it not apart (dist <= R) */
+            int g;
+            for (g = 0; g < m->ngroup; g++) {
+                const double *near = d1->group_near + 4 * g;
+                int k0 = m->group_adr[g], sh = m->slot_shape[k0];
+                double cw[3], t[3], cl[3], dist, n[3], s[3], mv, R0 = m->group_radius[g];
+                const double *R = d1->shape_R + 9 * sh;
+                if (!(near[3] < HUGE_VAL)) continue;
+                cr_assert_eq(cd_shape_distance(m, sh, near, 0.0, &dist, n, s), 0);
+                cr_assert(same(dist, near[3]), "pose %d group %d: near sphere %.17g, exact %.17g", pose, g, near[3], dist);
+                cd_point_world(m, d1, m->cp_body[m->slot_cp[k0]], m->group_pos + 3 * g, cw, NULL);
+                for (k = 0; k < 3; k++) t[k] = cw[k] - d1->shape_xw[3 * sh + k];
+                cl[0] = R[0] * t[0] + R[3] * t[1] + R[6] * t[2];
+                cl[1] = R[1] * t[0] + R[4] * t[1] + R[7] * t[2];
+                cl[2] = R[2] * t[0] + R[5] * t[1] + R[8] * t[2];
+                for (k = 0; k < 3; k++) t[k] = cl[k] - near[k];
+                mv = sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+                if (near[3] + mv < R0 - 1e-6 && mv > 0) {
+                    nnear++;
+                    cr_assert_eq(cd_shape_distance(m, sh, cl, 0.0, &dist, n, s), 0);
+                    cr_assert(dist <= R0, "pose %d group %d: skippable by its near sphere, yet %.17g from the shape "
+                              "(R %.17g)", pose, g, dist, R0);
+                }
+            }
+        }
         if (pose % 100 == 0) { /* cd_contact_complete leaves every array as the full evaluation's */
             cd_contact_complete(m, d1);
             for (k = 0; k < m->nslot; k++) cr_assert_eq(d1->slot_far[k], 0);
@@ -256,6 +284,8 @@ Test(broadphase, never_skips_a_touching_slot_and_changes_no_output)
     cr_log_info("%d free spheres larger than the check point in the random walk", nfree);
     cr_expect_gt(nfree, 10000, "the walk's evaluations cache free spheres");
     cr_expect_gt(nfar_bound, 1000, "many before their own exact query");
+    cr_log_info("%d group centres within their near sphere's bound after a move (the group query skipped)", nnear);
+    cr_expect_gt(nnear, 100, "the walk's evaluations use the groups' near spheres");
     cr_log_info("%d open slots left out of the smallest switching function (apart by more than r)", nleft);
     cr_expect_gt(nleft, 10000, "most open slots are apart by more than r");
     cd_data_free(d0);
