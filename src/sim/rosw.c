@@ -194,7 +194,7 @@ void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem)
     (void)carve(w, p, n, na);
 }
 
-void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; }
+void cd_rosw_invalidate(cd_rosw *w) { w->jac_ok = 0; w->lu_ok = 0; w->rho_ok = 0; }
 
 /* the active set at the current modes */
 static void active_set(cd_rosw *w)
@@ -313,6 +313,7 @@ static int jacobian(cd_rosw *w, double t, const double *y, const double *f0, con
     active_set(w);
     na = w->na;
     w->red = 0;
+    w->rho_ok = 0;
     if (!w->m && sys->jacobian) { /* plain: the system's own (exact) Jacobian and df/dt */
         if (sys->jacobian(t, y, w->J, w->ft, sys->params) != GSL_SUCCESS) return GSL_EBADFUNC;
         if (!exact) memset(w->ft, 0, (size_t)n * sizeof(double));
@@ -625,7 +626,10 @@ double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y)
 {
     int na, i, k;
     double *v = w->r, *u = w->g, logsum = 0;
-    if (!w->jac_ok) {
+    const int own = w->jac_ok; /* the stepper's J: its estimate is kept until J is formed again */
+    if (own && w->rho_ok) return w->rho; /* the same J, the same iterations: the same value */
+    w->rho_ok = 0;
+    if (!own) {
         active_set(w);
         if (cd_jac_model(w->m, w->d, t, y, w->act, w->na, w->J, &w->jw) != CD_OK) return -1.0;
         w->jac_ok = 0; /* formed for the estimate only: the stepper forms its own at its step */
@@ -665,7 +669,9 @@ double cd_rosw_spectral_radius(cd_rosw *w, double t, const double *y)
         if (k >= 10) logsum += log(nu);
         memcpy(v, u, (size_t)na * sizeof(double));
     }
-    return exp(logsum / 10.0);
+    w->rho = exp(logsum / 10.0);
+    w->rho_ok = own;
+    return w->rho;
 }
 
 static int rosw_set_driver(void *vs, const gsl_odeiv2_driver *d)

@@ -57,6 +57,8 @@ typedef struct {
     int nrun, *rlo, *rhi;     /* (ny + 2 each) the runs of unknowns that can move (cd_moving_runs) */
     int *jlo, *jhi;           /* (na_max each) each row's first and one past its last nonzero in J
                                * (cd_rosw_spectral_radius) */
+    double rho;               /* the spectral radius of J, valid while rho_ok: the stepper's J has */
+    int rho_ok;               /* not been formed again since (cd_rosw_spectral_radius) */
 } cd_rosw;
 
 /* Bytes of the buffers of cd_rosw_init (16-aligned start). */
