@@ -358,6 +358,61 @@ static void skip_slot(cd_data *d, int k, double x, double *zdot)
 
 static void eval_slot(const cd_model *m, cd_data *d, int k, double *zdot);
 
+/* The slots of a group that is not apart, in their order. An open slot
+ * whose check point is clearly beyond the shape's bounding sphere is
+ * skipped first by a test in its body's frame: the sphere's centre is taken
+ * into that frame once for the group, so the test costs a difference and a
+ * dot product instead of the check point's world position (most of the
+ * Fig. 5 grasp's slots are such at most evaluations; open_apart was 13 % of
+ * its instructions). Its x is the bounding sphere's gap as it finds it, an
+ * upper bound of the penetration like every skipped slot's (slot_x), which
+ * only the rounding of the other frame tells from open_apart's; 1e-10
+ * relative on the squared limit keeps the decision clear of that rounding.
+ * Nothing the run computes from a skipped slot reads that x: the switching
+ * functions and the outputs take the full evaluation's own (open_outputs,
+ * cd_contact_switch_near), and its force is zero either way. Every other
+ * open slot goes through open_apart's two tests (what eval_slot would find
+ * first, by the same operations), the rest through eval_slot. */
+static void group_slots(const cd_model *m, cd_data *d, int g, double *zdot)
+{
+    const int k0 = m->group_adr[g], k1 = k0 + m->group_num[g];
+    const int sh = m->slot_shape[k0], b = m->cp_body[m->slot_cp[k0]];
+    const double rb = m->shape_rbound[sh];
+    double cb[3], t[3], xb;
+    int k, pre = 0;
+    if (rb < HUGE_VAL) {
+        cd_v3_sub(t, d->shape_xw + 3 * sh, d->body_x + 3 * b);
+        cd_m3_tmulv(cb, d->body_R + 9 * b, t);
+        /* tried only where the group's centre is outside the bounding
+         * sphere, where many of its check points are (a long shape's sphere
+         * holds whole groups near it, whose check points would pay the test
+         * and then open_apart's: the capture scenes' instructions rose by
+         * 0.9 % with the test wherever any of the group's sphere was outside,
+         * 0.7 % with this rule) */
+        cd_v3_sub(t, m->group_pos + 3 * g, cb);
+        pre = cd_v3_norm(t) > rb;
+    }
+    for (k = k0; k < k1; k++) {
+        if (d->slot_mode[k] != CD_MODE_OPEN) {
+            eval_slot(m, d, k, zdot);
+            continue;
+        }
+        if (pre) {
+            const int cp = m->slot_cp[k];
+            const double r = m->cp_radius[cp], lim = rb + r + CD_BROAD_MARGIN, *p = m->cp_pos + 3 * cp;
+            double dd;
+            cd_v3_sub(t, p, cb);
+            dd = cd_v3_dot(t, t);
+            if (dd > lim * lim * (1.0 + 1e-10)) {
+                skip_slot(d, k, r - (sqrt(dd) - rb), zdot);
+                continue;
+            }
+        }
+        if (open_apart(m, d, k, d->slot_free + 4 * k, &xb)) skip_slot(d, k, xb, zdot);
+        else eval_slot(m, d, k, zdot);
+    }
+}
+
 /* The trial force of a slot with a tangential damper (D_t > 0): what the
  * stick law would apply at this state, f_tr = K_t z_t^pt + D_t v_t^qt
  * (world, tangential; the force on A is -f_tr), and its direction s (the
@@ -413,14 +468,7 @@ void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
                 if (d->slot_mode[k] == CD_MODE_OPEN) skip_slot(d, k, xb, zdot);
                 else eval_slot(m, d, k, zdot);
         } else if (d->opt.broad_phase) {
-            /* an open slot apart is skipped by open_apart alone (what
-             * eval_slot would find first, by the same operations) */
-            for (k = k0; k < k1; k++) {
-                if (d->slot_mode[k] == CD_MODE_OPEN && open_apart(m, d, k, d->slot_free + 4 * k, &xb))
-                    skip_slot(d, k, xb, zdot);
-                else
-                    eval_slot(m, d, k, zdot);
-            }
+            group_slots(m, d, g, zdot);
         } else {
             for (k = k0; k < k1; k++) eval_slot(m, d, k, zdot);
         }
