@@ -298,3 +298,47 @@ Test(bdf, fig5_grasp_agrees_with_tight_rk8pd, .timeout = 900)
         cr_expect_eq(o[0].kinds[i], o[1].kinds[i], "events of kind %d: msbdf (rtol 3e-11) %ld, rk8pd %ld", i,
                      o[0].kinds[i], o[1].kinds[i]);
 }
+
+/* An output time reached a few ulps after the last one (a caller's sample
+ * grid, a landing that fell short by round-off) makes a sliver step of
+ * ~1e-15 s. Above order 1 the step-ratio rule allowed the next step only
+ * 1.5 times that sliver, so every later step was refused down to below h_min
+ * and the run stopped with CD_ESTALL (seen on capture_handrail_tumbling at
+ * 3.51 s with `capdyn run`). A sliver now restarts the history at order 1
+ * (BDF1 is zero-stable at any step ratio): the run goes on and ends where the
+ * run without the sliver ends, within the tolerance. */
+Test(bdf, continues_after_a_sliver_step)
+{
+    static const char *ov[] = {"simulation.integrator=\"msbdf\"", "simulation.rtol=1e-9"};
+    char path[1024];
+    cd_error e;
+    cd_scenario *sc;
+    cd_data *d[2];
+    const cd_model *m;
+    double t1 = 0.5, worst = 0;
+    int i, r;
+    snprintf(path, sizeof path, "%s/scenarios/free_floating_arm.toml", step_root());
+    sc = cd_scenario_load(path, ov, 2, &e);
+    cr_assert(sc, "%s", e.msg);
+    m = sc->model;
+    for (r = 0; r < 2; r++) {
+        d[r] = cd_data_create(m, sc->event_capacity, &e);
+        cr_assert(d[r], "%s", e.msg);
+        cr_assert_eq(cd_sim_advance(m, d[r], t1, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cr_assert(d[r]->stats.h_last > 1e-6, "ordinary steps before the sliver (last %g s)", d[r]->stats.h_last);
+        if (r == 1) {
+            double ts = t1;
+            for (i = 0; i < 8; i++) ts = nextafter(ts, 1.0); /* 8 ulps: 8.9e-16 s */
+            cr_assert_eq(cd_sim_advance(m, d[r], ts, NULL, NULL, &e), CD_OK, "%s", e.msg);
+            cr_assert_lt(d[r]->stats.h_last, 1e-14, "a sliver step (%g s)", d[r]->stats.h_last);
+        }
+        cr_assert_eq(cd_sim_advance(m, d[r], 1.0, NULL, NULL, &e), CD_OK, "run %d after %g s: %s", r, t1, e.msg);
+    }
+    for (i = 0; i < m->ny; i++)
+        if (fabs(d[0]->y[i] - d[1]->y[i]) > worst) worst = fabs(d[0]->y[i] - d[1]->y[i]);
+    cr_log_info("after a sliver step: %ld steps against %ld, largest difference of the state %.3e", d[1]->stats.nsteps,
+                d[0]->stats.nsteps, worst);
+    cr_expect_lt(worst, 1e-6, "the state after the sliver differs by %.3e", worst);
+    for (r = 0; r < 2; r++) cd_data_free(d[r]);
+    cd_scenario_free(sc);
+}

@@ -348,8 +348,21 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
      * times the last one above order 1 is refused without any evaluation
      * (evolve halves it) */
     if (g->nh >= 2 && k > 1 && h > CD_BDF_RATIO_MAX * (g->th[0] - g->th[1])) {
-        g->nratio++;
-        return GSL_FAILURE;
+        if (!(g->th[0] - g->th[1] < CD_BDF_SLIVER * h)) {
+            g->nratio++;
+            return GSL_FAILURE;
+        }
+        /* the last step a sliver (an output time a few ulps after the one
+         * before, a landing short by round-off): the 1.5x rule would hold
+         * the steps near its length, below h_min. The history restarts at
+         * this point, at order 1, whose zero-stability has no step-ratio
+         * bound, as after an event. */
+        g->nh = 0;
+        g->k = g->k_next = 1;
+        g->nk = 0;
+        g->nrej = 0;
+        push(g, t, y);
+        k = 1;
     }
     g->k_used = k;
     /* the Jacobian (as gauss4.c) */

@@ -10,6 +10,8 @@
 #define CD_BDF_KAPPA 0.01    /* Newton stops when its estimated remaining error is below this x tolerance */
 #define CD_BDF_GAMMA_TOL 0.3 /* the iteration matrix is refactored when h/alpha0 changed by more */
 #define CD_BDF_RATIO_MAX 1.5 /* above order 1 a step grows by at most this factor (else refused) */
+#define CD_BDF_SLIVER 1e-6   /* ... unless the last step was shorter than this times the new one: a
+                              * sliver (an output time a few ulps on), after which the history restarts */
 
 typedef struct {
     cd_rosw *rw;              /* the Jacobian on the active set (rosw.c's workspace) */
