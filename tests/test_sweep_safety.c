@@ -101,7 +101,12 @@ Test(sweep_safety, a_file_another_capdyn_writes_is_refused_both_ways, .timeout =
     /* (1) sweep -o the results file of a running capdyn run: refused, and
      * the run then ends normally with its file readable; (2) while a sweep
      * runs, capdyn run -o its summary and a second sweep with the same -o
-     * are refused, and the first sweep completes all its variants. */
+     * are refused, and the first sweep completes all its variants. The
+     * run and the sweep that are refused against last about a second of
+     * wall time each, so that they are still writing when the refused
+     * commands start: with 0.6 s and 12 x 0.1 s of simulated time (about
+     * 0.15 s of wall time, as fast as capdyn had become) the first sweep
+     * could end before the second command started, on a loaded machine */
     char dir[64], sc[600], r[600], s[600], *err, *out;
     char *rargv[16], *sargv[24];
     int n = 0;
@@ -120,7 +125,7 @@ Test(sweep_safety, a_file_another_capdyn_writes_is_refused_both_ways, .timeout =
     rargv[n++] = "-o";
     rargv[n++] = r;
     rargv[n++] = "--set";
-    rargv[n++] = "simulation.duration=0.6";
+    rargv[n++] = "simulation.duration=3";
     rargv[n] = NULL;
     {
         char sub[600];
@@ -145,7 +150,7 @@ Test(sweep_safety, a_file_another_capdyn_writes_is_refused_both_ways, .timeout =
     sargv[n++] = "sweep";
     sargv[n++] = sc;
     sargv[n++] = "--set";
-    sargv[n++] = "simulation.duration=0.1";
+    sargv[n++] = "simulation.duration=1";
     sargv[n++] = "--vary";
     sargv[n++] = "target.object.mass=0.3:0.4:12";
     sargv[n++] = "-j";
