@@ -454,6 +454,13 @@ static void bristle_va(const cd_contact_law *L, const double RB[9], const double
     if (zd_out) cd_v3_copy(zd_out, zd);
 }
 
+void cd_contact_cache_clear(const cd_model *m, cd_data *d)
+{
+    int g;
+    memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double)); /* a radius <= 0 holds nothing */
+    for (g = 0; g < m->ngroup; g++) d->group_near[4 * g + 3] = HUGE_VAL;
+}
+
 void cd_contact_eval(const cd_model *m, cd_data *d, double *zdot)
 {
     int g, k;

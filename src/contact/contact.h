@@ -54,6 +54,11 @@ static inline double cd_law_normal(const cd_contact_law *L, double x, double xd,
     return L->K * cd_sgnpow(x, L->p) + L->D * xq;
 }
 
+/* Clears the broad phase's caches (d->slot_free, d->group_near): a fresh
+ * data and a restored state start without them (cd_data_reset,
+ * cd_state_set); the results never depend on them. */
+void cd_contact_cache_clear(const cd_model *m, cd_data *d);
+
 /* Evaluates every slot after cd_kinematics: fills the slot outputs, adds the
  * wrenches to d->body_fext and writes the anchors' derivatives into zdot
  * (3 per slot). zdot must be the data's own d->ydot + m->ny_slot_adr, the

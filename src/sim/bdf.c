@@ -173,6 +173,16 @@ static void push(cd_bdf *g, double t, const double *y)
     if (g->nh < CD_BDF_NHIST) g->nh++;
 }
 
+/* A restart of the history at (t, y): order 1, this point alone */
+static void restart_history(cd_bdf *g, double t, const double *y)
+{
+    g->nh = 0;
+    g->k = g->k_next = 1;
+    g->nk = 0;
+    g->nrej = 0;
+    push(g, t, y);
+}
+
 void cd_bdf_seed(cd_bdf *g, double t, const double *y)
 {
     push(g, t, y);
@@ -332,11 +342,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             g->nk = 0;
         }
     } else if (!(g->nh > 0 && near(t, g->th[0], h))) { /* anywhere else: a restart */
-        g->nh = 0;
-        g->k = g->k_next = 1;
-        g->nk = 0;
-        g->nrej = 0;
-        push(g, t, y);
+        restart_history(g, t, y);
     }
     g->have_pend = 0;
     memcpy(g->Y[0], y, (size_t)n * sizeof(double)); /* the state as evolve passes it */
@@ -357,11 +363,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
          * the steps near its length, below h_min. The history restarts at
          * this point, at order 1, whose zero-stability has no step-ratio
          * bound, as after an event. */
-        g->nh = 0;
-        g->k = g->k_next = 1;
-        g->nk = 0;
-        g->nrej = 0;
-        push(g, t, y);
+        restart_history(g, t, y);
         k = 1;
     }
     g->k_used = k;

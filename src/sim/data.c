@@ -5,11 +5,11 @@
 #include "../math/cd_math.h"
 #include "integ.h"
 #include "../dynamics/aba.h"
+#include "../contact/contact.h"
 
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
-#include <math.h>
 #include <string.h>
 
 static void *std_alloc(size_t n, void *ctx) { (void)ctx; return malloc(n); }
@@ -195,8 +195,7 @@ cd_status cd_data_reset(const cd_model *m, cd_data *d, cd_error *err)
         d->slot_mode[k] = CD_MODE_OPEN;
         cd_v3_zero(d->slot_dir + 3 * k);
     }
-    memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double)); /* no free sphere yet */
-    for (k = 0; k < m->ngroup; k++) d->group_near[4 * k + 3] = HUGE_VAL; /* no near sphere yet */
+    cd_contact_cache_clear(m, d); /* no free or near sphere yet */
     for (k = 0; k < m->nlim; k++) d->lim_mode[k] = CD_LIM_FREE;
     for (k = 0; k < m->nfric; k++) {
         d->fric_mode[k] = CD_MODE_STICK;

@@ -5,6 +5,7 @@
  * (cd_integ_state_*). Integers are stored exactly as doubles. */
 #include "capdyn/sim.h"
 #include "integ.h"
+#include "../contact/contact.h"
 
 #include <limits.h>
 #include <stdio.h>
@@ -206,12 +207,8 @@ cd_status cd_state_set(const cd_model *m, cd_data *d, const double *buf, cd_erro
 #undef PUT
     }
     p = set_body(m, d, buf + HEADER);
-    /* the broad phase's free spheres start afresh, as in a fresh data */
-    memset(d->slot_free, 0, (size_t)m->nslot * 4 * sizeof(double));
-    {
-        int g;
-        for (g = 0; g < m->ngroup; g++) d->group_near[4 * g + 3] = HUGE_VAL;
-    }
+    /* the broad phase's caches start afresh, as in a fresh data */
+    cd_contact_cache_clear(m, d);
     if (cd_forward(m, d) != CD_OK) {
         double t = d->t;
         (void)set_body(m, d, undo);
