@@ -11,7 +11,7 @@ BUILD   ?= build-mpi
 endif
 BUILD   ?= build
 PKGS_CORE = gsl ccd
-PKGS_IO   = hdf5 tomlplusplus qhull_r urdfdom
+PKGS_IO   = hdf5 zlib tomlplusplus qhull_r urdfdom
 ifeq ($(MPI),1)
 PKGS_IO  += ompi-c
 EXTRA_CFLAGS += -DCAPDYN_MPI

@@ -7,7 +7,7 @@
 #        for `make fuzz` only (scripts/install-fuzz-deps.sh)
 set -euo pipefail
 
-pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev hdf5-tools libccd-dev
+pkgs=(build-essential pkg-config libgsl-dev libhdf5-dev zlib1g-dev hdf5-tools libccd-dev
       libtomlplusplus-dev libqhull-dev libcriterion-dev liburdfdom-dev gnuplot-nox strace)
 # shellcheck disable=SC2206
 pkgs+=(${CAPDYN_EXTRA_PKGS:-})

@@ -657,6 +657,54 @@ Test(cli, a_full_disk_stops_the_run_with_one_error_and_keeps_the_committed_sampl
     rm_rf(dir);
 }
 
+/* The child of the two tests below: runs the scenario sc through the library
+ * writer (compressed or not), commits ncommit samples dt apart, lowers its
+ * file size limit to the file's size + 8 KiB (SIGXFSZ ignored: a write fails
+ * with EFBIG), turns the space check off and goes on to 3 ncommit samples.
+ * The flush must fail (CD_EIO, the message naming the file and the
+ * committed samples), the close too, and H5close after it must not crash
+ * (on a file left half closed in HDF5's id table). Exits 0, or the number
+ * of the check that failed. */
+static void quota_child(const char *sc, const char *h5, int no_compress, long ncommit, double dt)
+{
+    cd_error e;
+    char want[32];
+    cd_scenario *s = cd_scenario_load(sc, NULL, 0, &e);
+    cd_data *d = s ? cd_data_create(s->model, s->event_capacity, &e) : NULL;
+    cd_h5_writer *w;
+    struct stat sb;
+    struct rlimit rl;
+    cd_status r = CD_OK;
+    long k;
+    if (!d) _exit(10);
+    s->no_compress = no_compress;
+    w = cd_h5_create(h5, s->model, s, &e);
+    if (!w) _exit(10);
+    for (k = 0; k < ncommit && r == CD_OK; k++) {
+        if (k > 0) r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
+        if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
+    }
+    if (r != CD_OK || cd_h5_flush(w, &e) != CD_OK) _exit(11);
+    if (stat(h5, &sb) != 0 || getrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(12);
+    signal(SIGXFSZ, SIG_IGN);
+    rl.rlim_cur = (rlim_t)sb.st_size + 8192;
+    if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
+    cd_h5_writer_set_space_check(w, 0, 0);
+    for (; k < 3 * ncommit && r == CD_OK; k++) {
+        r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
+        if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
+    }
+    if (r == CD_OK) r = cd_h5_flush(w, &e);
+    if (r != CD_EIO) _exit(14);
+    snprintf(want, sizeof want, "%ld samples", ncommit);
+    if (!strstr(e.msg, h5) || !strstr(e.msg, want)) _exit(15);
+    if (cd_h5_close(w, s->model, d, CD_OK, "finished", &e) != CD_EIO) _exit(16);
+    cd_data_free(d);
+    cd_scenario_free(s);
+    H5close();
+    _exit(0);
+}
+
 Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
 {
     /* A write that fails where no check can foresee it (a disk quota): the
@@ -665,7 +713,11 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
      * scenario. The file is then truncated (HDF5 recorded a larger end of
      * file than it could write). `capdyn info` says so and names the
      * recovery; after `h5clear --increment=0` it reads the 2000 committed
-     * samples, at the times they were taken, and a status that is not "ok". */
+     * samples, at the times they were taken, and a status that is not "ok".
+     * Uncompressed (simulation.compress = false): HDF5 writes the chunks
+     * from its cache and fails there. The compressed writer writes its own
+     * chunks (src/io/h5_pack.c) and leaves no truncated file:
+     * a_failed_chunk_write_leaves_a_file_that_reads_as_committed. */
     char dir[64], sc[512], h5[256], st[600], *out = NULL, *err = NULL, want[400];
     pid_t pid;
     int rc, ws;
@@ -681,37 +733,7 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
     fflush(NULL);
     pid = fork();
     cr_assert(pid >= 0);
-    if (pid == 0) {
-        cd_error e;
-        cd_scenario *s = cd_scenario_load(sc, NULL, 0, &e);
-        cd_data *d = s ? cd_data_create(s->model, s->event_capacity, &e) : NULL;
-        cd_h5_writer *w = d ? cd_h5_create(h5, s->model, s, &e) : NULL;
-        struct stat sb;
-        struct rlimit rl;
-        cd_status r = CD_OK;
-        if (!w) _exit(10);
-        for (k = 0; k < ncommit && r == CD_OK; k++) {
-            if (k > 0) r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
-            if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
-        }
-        if (r != CD_OK || cd_h5_flush(w, &e) != CD_OK) _exit(11);
-        if (stat(h5, &sb) != 0 || getrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(12);
-        signal(SIGXFSZ, SIG_IGN);
-        rl.rlim_cur = (rlim_t)sb.st_size + 8192;
-        if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
-        cd_h5_writer_set_space_check(w, 0, 0);
-        for (; k < 3 * ncommit && r == CD_OK; k++) {
-            r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
-            if (r == CD_OK) r = cd_h5_append(w, s->model, d, &e);
-        }
-        if (r == CD_OK) r = cd_h5_flush(w, &e);
-        if (r != CD_EIO) _exit(14);
-        if (cd_h5_close(w, s->model, d, CD_OK, "finished", &e) != CD_EIO) _exit(15);
-        cd_data_free(d);
-        cd_scenario_free(s);
-        H5close(); /* would crash on a file left half closed in HDF5's id table */
-        _exit(0);
-    }
+    if (pid == 0) quota_child(sc, h5, 1, ncommit, dt);
     cr_assert_eq(waitpid(pid, &ws, 0), pid);
     cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
               WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
@@ -748,6 +770,51 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
         cr_expect_eq(parse_columns(out, &ncol), ncommit, "export gives the committed samples");
     }
     free(out);
+    rm_rf(dir);
+}
+
+Test(cli, a_failed_chunk_write_leaves_a_file_that_reads_as_committed, .timeout = 60)
+{
+    /* The same failure as above with the default, compressed writer, which
+     * packs and writes its chunks itself (src/io/h5_pack.c): the refused
+     * chunk write is reported (exit status CD_EIO, the message names the
+     * file and the 2000 committed samples), the writer closes without
+     * crashing (H5close after it), and the file reads as it was at its last
+     * commit without any recovery: `capdyn info` exits 0 with the 2000
+     * samples, at the times they were taken, and a status that is not "ok". */
+    char dir[64], sc[512], h5[256], st[600], *out = NULL, *err = NULL;
+    pid_t pid;
+    int rc, ws;
+    long k;
+    const long ncommit = 2000;
+    const double dt = 1e-4;
+    hid_t f;
+    size_t n;
+    double *t;
+    make_tmpdir(dir, sizeof dir);
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    snprintf(h5, sizeof h5, "%s/quota.h5", dir);
+    fflush(NULL);
+    pid = fork();
+    cr_assert(pid >= 0);
+    if (pid == 0) quota_child(sc, h5, 0, ncommit, dt);
+    cr_assert_eq(waitpid(pid, &ws, 0), pid);
+    cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
+              WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
+    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    cr_assert_eq(rc, 0, "capdyn info without recovery: %s", err);
+    cr_expect_eq(info_samples(out), ncommit, "the committed samples: %s", out);
+    info_status(out, st, sizeof st);
+    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
+    free(out);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    t = read_all(f, "/time", &n);
+    cr_assert_geq(n, (size_t)ncommit);
+    for (k = 0; k < ncommit; k++) cr_assert_eq(t[k], (double)k * dt, "t[%ld] = %.17g", k, t[k]);
+    free(t);
+    H5Fclose(f);
     rm_rf(dir);
 }
 
@@ -1129,41 +1196,94 @@ Test(cli, jacobian_count_is_recorded_for_the_stiff_stepper_only)
     rm_rf(dir);
 }
 
-Test(cli, uncompressed_results_hold_the_same_samples)
+/* Every dataset of a results file (H5Ovisit), for the comparison below. */
+typedef struct {
+    char name[64][128];
+    int n;
+} ds_list;
+
+static herr_t list_ds(hid_t obj, const char *name, const H5O_info_t *info, void *op)
+{
+    ds_list *l = (ds_list *)op;
+    (void)obj;
+    if (info->type == H5O_TYPE_DATASET && l->n < 64) snprintf(l->name[l->n++], sizeof l->name[0], "/%s", name);
+    return 0;
+}
+
+/* The bytes of dataset name of f in its native type (malloc'd), and their count. */
+static unsigned char *read_bytes(hid_t f, const char *name, size_t *nb, int *nfilters)
+{
+    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT), ft, mt, pl;
+    unsigned char *b = NULL;
+    *nb = 0;
+    *nfilters = -1;
+    if (ds < 0) return NULL;
+    ft = H5Dget_type(ds);
+    mt = H5Tget_native_type(ft, H5T_DIR_ASCEND);
+    *nb = (size_t)H5Sget_simple_extent_npoints(H5Dget_space(ds)) * H5Tget_size(mt);
+    b = calloc(*nb + 1, 1);
+    if (b && H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) { free(b); b = NULL; }
+    pl = H5Dget_create_plist(ds);
+    *nfilters = H5Pget_nfilters(pl);
+    H5Pclose(pl);
+    H5Tclose(mt);
+    H5Tclose(ft);
+    H5Dclose(ds);
+    return b;
+}
+
+Test(cli, uncompressed_results_hold_the_same_samples, .timeout = 120)
 {
     /* simulation.compress = false (issue 11: HDF5 compression optional): the
-     * sample series carry no filter, and hold the same values bit for bit as
-     * the default shuffle + deflate file of the same run. */
+     * sample series carry no filter. The default file's series are shuffled
+     * and deflated, their chunks packed by capdyn itself (src/io/h5_pack.c:
+     * byte planes deflated or stored by their entropy) and rewritten at every
+     * commit while they fill: every dataset of the two files of the same run
+     * (the Fig. 5 grasp, 0.3 s: 301 samples, contact series of 44 slots in
+     * float64, int8 modes, int64 counters; a commit every few samples,
+     * flush_every = 1 ms of wall time) must hold the same bytes, read by
+     * HDF5's own filters, but the wall-clock time of each sample. (With a
+     * commit every millisecond the compressed file is the larger one: a
+     * rewritten chunk that grew takes new space, rule 2 of src/io/h5.c.) */
     char dir[64], sc[512], h5[2][256], *err = NULL;
     const char *opt[2] = {"simulation.compress=true", "simulation.compress=false"};
-    double *x[2];
-    size_t n[2];
-    int k, rc, nf[2];
+    static ds_list l[2];
+    hid_t f[2];
+    int k, i, rc, nseries = 0;
     make_tmpdir(dir, sizeof dir);
-    scen(sc, sizeof sc, "free_floating_arm.toml");
+    scen(sc, sizeof sc, "paper_fig5_envelope_grasp.toml");
     for (k = 0; k < 2; k++) {
-        hid_t f, ds, pl;
         snprintf(h5[k], sizeof h5[k], "%s/c%d.h5", dir, k);
-        rc = capdyn(dir, NULL, &err, "run", sc, "-o", h5[k], "--quiet", "--set", "simulation.duration=0.5", "--set", opt[k],
-                    (char *)NULL);
+        rc = capdyn(dir, NULL, &err, "run", sc, "-o", h5[k], "--quiet", "--set", "simulation.duration=0.3", "--set",
+                    "simulation.flush_every=1e-3", "--set", opt[k], (char *)NULL);
         cr_assert_eq(rc, 0, "exit %d: %s", rc, err);
         free(err);
-        f = open_ro(h5[k]);
-        cr_assert(f >= 0);
-        x[k] = read_all(f, "/systems/robot/body_x", &n[k]);
-        ds = H5Dopen2(f, "/systems/robot/body_x", H5P_DEFAULT);
-        pl = H5Dget_create_plist(ds);
-        nf[k] = H5Pget_nfilters(pl);
-        H5Pclose(pl);
-        H5Dclose(ds);
-        H5Fclose(f);
+        f[k] = open_ro(h5[k]);
+        cr_assert(f[k] >= 0);
+        l[k].n = 0;
+        cr_assert_geq(H5Ovisit(f[k], H5_INDEX_NAME, H5_ITER_NATIVE, list_ds, &l[k]), 0);
     }
-    cr_expect_eq(nf[0], 2, "default: shuffle + deflate, got %d filters", nf[0]);
-    cr_expect_eq(nf[1], 0, "compress = false: no filter, got %d", nf[1]);
-    cr_assert_eq(n[0], n[1]);
-    cr_expect_eq(memcmp(x[0], x[1], n[0] * sizeof(double)), 0, "the same samples");
-    free(x[0]);
-    free(x[1]);
+    cr_assert_eq(l[0].n, l[1].n, "the same datasets");
+    for (i = 0; i < l[0].n; i++) {
+        size_t nb[2];
+        int nf[2];
+        unsigned char *b[2];
+        cr_assert_str_eq(l[0].name[i], l[1].name[i]);
+        for (k = 0; k < 2; k++) b[k] = read_bytes(f[k], l[0].name[i], &nb[k], &nf[k]);
+        cr_assert(b[0] && b[1], "%s reads", l[0].name[i]);
+        cr_expect_eq(nb[0], nb[1], "%s: %zu and %zu bytes", l[0].name[i], nb[0], nb[1]);
+        if (nf[1] == 0 && nf[0] > 0) { /* a sample series */
+            nseries++;
+            cr_expect_eq(nf[0], strstr(l[0].name[i], "mode") ? 1 : 2, "%s: %d filters", l[0].name[i], nf[0]);
+            if (!strstr(l[0].name[i], "wall_time"))
+                cr_expect(nb[0] == nb[1] && memcmp(b[0], b[1], nb[0]) == 0, "%s: the same bytes", l[0].name[i]);
+        }
+        free(b[0]);
+        free(b[1]);
+    }
+    cr_expect_geq(nseries, 20, "sample series compared: %d", nseries);
+    H5Fclose(f[0]);
+    H5Fclose(f[1]);
     rm_rf(dir);
 }
 

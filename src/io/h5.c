@@ -86,6 +86,7 @@
 #include <hdf5.h>
 #include "h5_util.h"
 #include "h5_schema.h"
+#include "h5_pack.h"
 #include <errno.h>
 #include <stdint.h>
 #include <stdarg.h>
@@ -132,7 +133,10 @@ typedef struct {
     size_t rowlen;        /* elements per row */
     int type;             /* T_F64, T_I64, T_I8 */
     unsigned char *buf;   /* cap_rows x rowlen elements */
-    long long chunk_rows; /* rows per chunk (for the space estimate) */
+    long long chunk_rows; /* rows per chunk */
+    unsigned char *chunk; /* the rows of the last chunk written, zeros after them
+                           * (chunk_rows x rowlen elements; only when the
+                           * writer packs its chunks itself, h5_pack.c) */
 } h5_series;
 
 /* series indices of one system, by series id (-1: not in this system) */
@@ -181,6 +185,7 @@ struct cd_h5_writer {
     double reserve;               /* bytes the check keeps free beyond its estimate */
     long long expect_rows;        /* samples the run expects (duration / output_dt + 2), 0 if unknown */
     int compress;                 /* deflate the sample series (simulation.compress, default 1) */
+    cd_h5_packer pack;            /* compress: the chunks' shuffle + deflate (h5_pack.c) */
     /* The file is written under a temporary name until its first commit
      * (the layout and the first sample) is flushed: claim_tmp is that name,
      * claim_target the name it then takes (NULL once renamed). */
@@ -655,8 +660,49 @@ static signed char *row_i8(cd_h5_writer *w, int si)
     return (signed char *)(s->buf + (size_t)w->nbuf * s->rowlen);
 }
 
+/* Writes rows [start, start + n) of series s, whose chunks the writer packs
+ * itself (h5_pack.c): every chunk they touch is written whole
+ * (H5Dwrite_chunk, all filters applied), the rows it had before from
+ * s->chunk. The last chunk's rows stay in s->chunk for the next commit,
+ * which rewrites that chunk (rule 2). A chunk that does not pack goes
+ * through HDF5's own filters. */
+static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
+{
+    const size_t rowbytes = s->rowlen * type_size(s->type);
+    const size_t bytes = (size_t)s->chunk_rows * rowbytes;
+    long long c, c0 = start / s->chunk_rows, c1 = (start + n - 1) / s->chunk_rows;
+    for (c = c0; c <= c1; c++) {
+        long long r0 = c * s->chunk_rows, r1 = r0 + s->chunk_rows, a = start > r0 ? start : r0;
+        long long b = start + n < r1 ? start + n : r1;
+        hsize_t off[3] = {(hsize_t)r0, 0, 0};
+        size_t len;
+        memcpy(s->chunk + (size_t)(a - r0) * rowbytes, s->buf + (size_t)(a - start) * rowbytes,
+               (size_t)(b - a) * rowbytes);
+        len = cd_h5_pack(p, s->chunk, bytes, type_size(s->type));
+        if (len > 0) {
+            if (H5Dwrite_chunk(s->dset, H5P_DEFAULT, 0, off, len, p->out) < 0) return -1;
+        } else { /* through HDF5's filters: the chunk's rows from its start */
+            hsize_t cnt[3];
+            hid_t fs = H5Dget_space(s->dset), ms;
+            herr_t r;
+            if (fs < 0) return -1;
+            cnt[0] = (hsize_t)(b - r0);
+            cnt[1] = s->tail[0];
+            cnt[2] = s->tail[1];
+            if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
+            ms = H5Screate_simple(s->rank, cnt, NULL);
+            r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, s->chunk) : -1;
+            if (ms >= 0) H5Sclose(ms);
+            H5Sclose(fs);
+            if (r < 0) return -1;
+        }
+        if (b == r1) memset(s->chunk, 0, bytes); /* full: the next chunk starts empty */
+    }
+    return 0;
+}
+
 /* Writes the pending rows of series s at rows [start, start + n). */
-static int write_rows(h5_series *s, long long start, int n)
+static int write_rows(cd_h5_writer *w, h5_series *s, long long start, int n)
 {
     hsize_t dims[3], off[3] = {0, 0, 0}, cnt[3];
     hid_t fs, ms;
@@ -666,6 +712,7 @@ static int write_rows(h5_series *s, long long start, int n)
     dims[2] = s->tail[1];
     if (H5Dset_extent(s->dset, dims) < 0) return -1;
     if (n == 0) return 0;
+    if (s->chunk) return write_chunks(&w->pack, s, start, n);
     off[0] = (hsize_t)start;
     cnt[0] = (hsize_t)n;
     cnt[1] = s->tail[0];
@@ -989,7 +1036,7 @@ static cd_status commit(cd_h5_writer *w, cd_error *err)
     }
     reserve_eoa(w, commit_bytes(w));
     for (i = 0; i < w->nser; i++)
-        if (write_rows(w->ser + i, w->nwritten, w->nbuf) < 0) {
+        if (write_rows(w, w->ser + i, w->nwritten, w->nbuf) < 0) {
             snprintf(what, sizeof what, "writing %d samples", w->nbuf);
             return write_failed(w, err, what);
         }
@@ -1023,14 +1070,24 @@ void cd_h5_writer_set_space_check(cd_h5_writer *w, int on, double reserve)
  * as the failure left it: its last commit plus what the failed flush got
  * out) nor fail. A close that fails would leave the file in HDF5's id
  * table half destroyed, and HDF5's clean-up at exit (or H5close) would then
- * crash on it. Reads of /dev/null give zeros; everything a close needs is
- * in HDF5's caches for files of this size. */
+ * crash on it. The descriptor goes to an unnamed temporary file (tmpfile;
+ * /dev/null if there is none): HDF5 ends a close by truncating the file to
+ * its end of allocation, which /dev/null refuses (EINVAL) when a chunk
+ * written directly (H5Dwrite_chunk) failed after its space was allocated,
+ * and the close then failed. Reads there give zeros; everything a close
+ * needs is in HDF5's caches for files of this size. */
 static void detach_file(cd_h5_writer *w)
 {
     void *h = NULL;
-    int sink;
+    int sink = -1;
+    FILE *tf;
     if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &h) < 0 || !h) return;
-    sink = open("/dev/null", O_RDWR);
+    tf = tmpfile();
+    if (tf) {
+        sink = dup(fileno(tf));
+        fclose(tf);
+    }
+    if (sink < 0) sink = open("/dev/null", O_RDWR);
     if (sink < 0) return;
     (void)dup2(sink, *(int *)h);
     close(sink);
@@ -1038,13 +1095,27 @@ static void detach_file(cd_h5_writer *w)
 
 static void writer_free(cd_h5_writer *w)
 {
-    int i;
+    int i, lifted = 0;
+    struct rlimit rl0;
     if (!w) return;
-    if (w->failed && w->file >= 0) detach_file(w);
+    if (w->failed && w->file >= 0) {
+        detach_file(w);
+        /* the close extends the (temporary, sparse) file to the end of
+         * allocation: a write refused by the file size limit (ulimit -f)
+         * must not make it fail too, so the soft limit is lifted to the hard
+         * one for the close, which writes nothing to the results file */
+        if (getrlimit(RLIMIT_FSIZE, &rl0) == 0 && rl0.rlim_cur != rl0.rlim_max) {
+            struct rlimit rl = rl0;
+            rl.rlim_cur = rl.rlim_max;
+            lifted = setrlimit(RLIMIT_FSIZE, &rl) == 0;
+        }
+    }
     for (i = 0; i < w->nser; i++) {
         if (w->ser[i].dset >= 0) H5Dclose(w->ser[i].dset);
         free(w->ser[i].buf);
+        free(w->ser[i].chunk);
     }
+    cd_h5_packer_free(&w->pack);
     free(w->ser);
     free(w->s_sys);
     free(w->evbuf);
@@ -1056,6 +1127,7 @@ static void writer_free(cd_h5_writer *w)
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
     if (w->owner_enum >= 0) H5Tclose(w->owner_enum);
     if (w->file >= 0) H5Fclose(w->file);
+    if (lifted) (void)setrlimit(RLIMIT_FSIZE, &rl0);
     if (!w->failed && w->file >= 0) trim_to_eoa(w->lock_fd);
     /* a file that never got its name holds no committed sample */
     if (w->claim_tmp && !w->claim_keep) unlink(w->claim_tmp);
@@ -1307,6 +1379,21 @@ static int alloc_buffers(cd_h5_writer *w)
     for (i = 0; i < w->nser; i++) {
         w->ser[i].buf = malloc((size_t)w->cap_rows * w->ser[i].rowlen * type_size(w->ser[i].type));
         if (!w->ser[i].buf) { w->oom = 1; return -1; }
+    }
+    /* compressed: the writer packs the chunks itself (h5_pack.c) when the
+     * file's types are the memory's bytes (a little-endian host) */
+    if (w->compress && H5Tequal(H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE) > 0 &&
+        H5Tequal(H5T_NATIVE_LLONG, H5T_STD_I64LE) > 0) {
+        size_t most = 0;
+        for (i = 0; i < w->nser; i++) {
+            size_t b = (size_t)w->ser[i].chunk_rows * w->ser[i].rowlen * type_size(w->ser[i].type);
+            if (b > most) most = b;
+        }
+        if (cd_h5_packer_init(&w->pack, most) < 0) { w->oom = 1; return -1; }
+        for (i = 0; i < w->nser; i++) {
+            w->ser[i].chunk = calloc((size_t)w->ser[i].chunk_rows * w->ser[i].rowlen, type_size(w->ser[i].type));
+            if (!w->ser[i].chunk) { w->oom = 1; return -1; }
+        }
     }
     return 0;
 }
