@@ -61,6 +61,23 @@ typedef struct {
 } rosw_tab;
 
 #define GAM 0.435866521508459
+#ifdef CD_TRIAL_ROS34PW3
+/* A build-time trial only (docs/performance.md section 18): ROS34PW3 of
+ * the same paper (order 4 with the exact Jacobian, 3 as a W-method,
+ * A-stable, R(inf) = 0.63) in place of ROS34PW2's tableau, converted to the
+ * increment form here (Gamma = (I/gam - C)^-1 of its transformed form; the
+ * same conversion gives ROS34PW2's coefficients below to 1e-15). */
+static const rosw_tab TAB_ROS34PW2 = {
+    "ros34pw3", 4, 4, 0, 1, 1.0685790213016289,
+    {{0, 0, 0}, {2.5155456020628821, 0, 0}, {0.50777280103144151, 0.75, 0}, {0.1395908140427724, -0.33111001065419338, 0.82040559712714178}},
+    {{0, 0, 0},
+     {-2.5155456020628817, 0, 0},
+     {-0.87991339217106534, -0.96014187766190695, 0},
+     {-0.41731389379448769, 0.41091047035857714, -1.3558873204765276}},
+    {0.22047681286931822, 0.0027828278331186, 0.00718447876351395, 0.7695558805340499},
+    {0.31300297285209672, -0.28946895245112703, 0.97646597959903003, 0},
+    {0}};
+#else
 static const rosw_tab TAB_ROS34PW2 = {
     "ros34pw2", 4, 3, 0, 1, GAM,
     {{0, 0, 0}, {0.87173304301691801, 0, 0}, {0.84457060015369423, -0.11299064236484185, 0}, {0, 0, 1}},
@@ -71,6 +88,7 @@ static const rosw_tab TAB_ROS34PW2 = {
     {0.24212380706095346, -1.2232505839045147, 1.5452602553351020, GAM},
     {0.37810903145819369, -0.096042292212423178, 0.5, 0.2179332607542295},
     {0}};
+#endif
 
 /* RODAS4: Hairer & Wanner, Solving Ordinary Differential Equations II (2nd
  * ed., Springer 1996), sec. VI.4, and the coefficients of their code
