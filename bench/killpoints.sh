@@ -4,7 +4,7 @@
 # (SIGKILL through strace's fault injection) at that write, and checks
 # after each kill that every committed sample reads back bit-identical to
 # the uninterrupted run. Prints "kill points N (killed K), intact M".
-# The run commits when 1024 rows are pending and at its close (flush_every
+# The run commits when a buffer of rows is full (1005 rows) and at its close (flush_every
 # 1e9 s), so that every run makes the same writes.
 # Usage: bench/killpoints.sh [SCENARIO.toml, relative to scenarios/]
 # (default paper_fig5_envelope_grasp.toml: 586 kill points, about 10 minutes alone).

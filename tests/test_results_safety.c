@@ -291,7 +291,7 @@ Test(results_safety, full_length_kill_campaign, .timeout = 7200)
     /* bench/killpoints.sh: the same campaign on a whole scenario run as
      * shipped (CAPDYN_KILL_SCENARIO, default the Fig. 5 grasp: 2001
      * samples), skipped unless CAPDYN_KILL_FULL=1 (it takes minutes). Its
-     * commits come when 1024 rows are pending and at the close only
+     * commits come when a buffer of rows is full (1005 rows) and at the close only
      * (flush_every 1e9 s): commits every flush_every seconds of wall time
      * would fall at other writes in every run, and the check that no kill
      * point has fewer committed samples than an earlier one needs the same

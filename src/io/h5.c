@@ -663,9 +663,11 @@ static signed char *row_i8(cd_h5_writer *w, int si)
 /* Writes rows [start, start + n) of series s, whose chunks the writer packs
  * itself (h5_pack.c): every chunk they touch is written whole
  * (H5Dwrite_chunk, all filters applied), the rows it had before from
- * s->chunk. The last chunk's rows stay in s->chunk for the next commit,
- * which rewrites that chunk (rule 2). A chunk that does not pack goes
- * through HDF5's own filters. */
+ * s->chunk. A chunk the commit leaves partly filled keeps its rows in
+ * s->chunk (zeros after them, as HDF5 fills) for the next commit, which
+ * rewrites that chunk (rule 2); a chunk of pending rows only is packed
+ * from the buffer. A chunk that does not pack goes through HDF5's own
+ * filters. */
 static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
 {
     const size_t rowbytes = s->rowlen * type_size(s->type);
@@ -675,10 +677,16 @@ static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
         long long r0 = c * s->chunk_rows, r1 = r0 + s->chunk_rows, a = start > r0 ? start : r0;
         long long b = start + n < r1 ? start + n : r1;
         hsize_t off[3] = {(hsize_t)r0, 0, 0};
+        const unsigned char *raw = s->chunk;
         size_t len;
-        memcpy(s->chunk + (size_t)(a - r0) * rowbytes, s->buf + (size_t)(a - start) * rowbytes,
-               (size_t)(b - a) * rowbytes);
-        len = cd_h5_pack(p, s->chunk, bytes, type_size(s->type));
+        if (a == r0 && b == r1) { /* a whole chunk of pending rows: packed where it is */
+            raw = s->buf + (size_t)(a - start) * rowbytes;
+        } else { /* rows after the last chunk's, and zeros after them */
+            memcpy(s->chunk + (size_t)(a - r0) * rowbytes, s->buf + (size_t)(a - start) * rowbytes,
+                   (size_t)(b - a) * rowbytes);
+            memset(s->chunk + (size_t)(b - r0) * rowbytes, 0, (size_t)(r1 - b) * rowbytes);
+        }
+        len = cd_h5_pack(p, raw, bytes, type_size(s->type));
         if (len > 0) {
             if (H5Dwrite_chunk(s->dset, H5P_DEFAULT, 0, off, len, p->out) < 0) return -1;
         } else { /* through HDF5's filters: the chunk's rows from its start */
@@ -691,12 +699,11 @@ static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
             cnt[2] = s->tail[1];
             if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
             ms = H5Screate_simple(s->rank, cnt, NULL);
-            r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, s->chunk) : -1;
+            r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, raw) : -1;
             if (ms >= 0) H5Sclose(ms);
             H5Sclose(fs);
             if (r < 0) return -1;
         }
-        if (b == r1) memset(s->chunk, 0, bytes); /* full: the next chunk starts empty */
     }
     return 0;
 }
@@ -1376,6 +1383,20 @@ static int alloc_buffers(cd_h5_writer *w)
     w->cap_rows = (int)((8u << 20) / (rowbytes ? rowbytes : 1));
     if (w->cap_rows > 1024) w->cap_rows = 1024;
     if (w->cap_rows < 1) w->cap_rows = 1;
+    /* ... a whole number of chunks of the series with the widest rows, so
+     * that the commits of a full buffer (at multiples of cap_rows rows, see
+     * cd_h5_append) end on their chunk boundaries: the chunk a commit leaves
+     * partly filled is packed again at the next one (rule 2), which cost
+     * 35 % more packing on the Fig. 5 grasp before */
+    {
+        size_t widest = 0;
+        long long cr = 0;
+        for (i = 0; i < w->nser; i++) {
+            size_t rb = w->ser[i].rowlen * type_size(w->ser[i].type);
+            if (rb > widest) { widest = rb; cr = w->ser[i].chunk_rows; }
+        }
+        if (cr > 0 && cr <= w->cap_rows) w->cap_rows -= (int)(w->cap_rows % cr);
+    }
     for (i = 0; i < w->nser; i++) {
         w->ser[i].buf = malloc((size_t)w->cap_rows * w->ser[i].rowlen * type_size(w->ser[i].type));
         if (!w->ser[i].buf) { w->oom = 1; return -1; }
@@ -1894,9 +1915,11 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     }
     w->nbuf++;
     fin = check_finite(w, d->t, err); /* the row is kept either way */
-    /* a full buffer commits; so does the first sample, after which the file
-     * takes its name */
-    if (w->nbuf == w->cap_rows || w->claim_tmp) {
+    /* a full buffer commits, and so does a row count that is a multiple of
+     * the buffer's rows (aligned with the widest series' chunks, see
+     * alloc_buffers); so does the first sample, after which the file takes
+     * its name */
+    if (w->nbuf == w->cap_rows || (w->nwritten + w->nbuf) % w->cap_rows == 0 || w->claim_tmp) {
         cd_h5_quiet q;
         cd_status st;
         cd_error cerr;
