@@ -659,7 +659,7 @@ Test(cli, a_full_disk_stops_the_run_with_one_error_and_keeps_the_committed_sampl
 
 /* The child of the two tests below: runs the scenario sc through the library
  * writer (compressed or not), commits ncommit samples dt apart, lowers its
- * file size limit to the file's size + 8 KiB (SIGXFSZ ignored: a write fails
+ * file size limit, soft and hard, to the file's size + 8 KiB (SIGXFSZ ignored: a write fails
  * with EFBIG), turns the space check off and goes on to 3 ncommit samples.
  * The flush must fail (CD_EIO, the message naming the file and the
  * committed samples), the close too, and H5close after it must not crash
@@ -687,7 +687,7 @@ static void quota_child(const char *sc, const char *h5, int no_compress, long nc
     if (r != CD_OK || cd_h5_flush(w, &e) != CD_OK) _exit(11);
     if (stat(h5, &sb) != 0 || getrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(12);
     signal(SIGXFSZ, SIG_IGN);
-    rl.rlim_cur = (rlim_t)sb.st_size + 8192;
+    rl.rlim_cur = rl.rlim_max = (rlim_t)sb.st_size + 8192; /* both, as `ulimit -f` sets them */
     if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
     cd_h5_writer_set_space_check(w, 0, 0);
     for (; k < 3 * ncommit && r == CD_OK; k++) {

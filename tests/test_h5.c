@@ -369,8 +369,8 @@ Test(h5, only_committed_samples_are_on_disk_and_append_after_flush_works)
 Test(h5, a_full_buffer_commits_by_itself)
 {
     /* 1500 samples without any cd_h5_flush: the writer buffers at most 1024
-     * rows (a whole number of chunks of its widest series, so at least 513:
-     * alloc_buffers), so a copy taken then holds more than 1500 - 1024
+     * rows (a whole number of chunks of its widest series, more than half
+     * of 1024: alloc_buffers), so a copy taken then holds more than 1500 - 1024
      * committed samples, a whole number of buffers after the first sample's
      * commit, and never more rows than the counter admits beyond the
      * pending buffer. */

@@ -60,7 +60,7 @@ Test(h5_pack, noisy_doubles_store_their_low_planes_and_round_trip)
     cr_assert(x);
     for (i = 0; i < ne; i++) x[i] = 1.0 + 0.5 * sin(1e-4 * (double)i) + 1e-6 * (double)(lcg(&s) % 1000000) / 1e6;
     cr_assert_eq(cd_h5_packer_init(&p, n), 0);
-    len = cd_h5_pack(&p, (const unsigned char *)x, n, sizeof(double));
+    len = cd_h5_pack(&p, (const unsigned char *)x, n, n, sizeof(double));
     cr_assert_gt(len, 0);
     expect_round_trip(&p, len, (const unsigned char *)x, n, sizeof(double));
     cr_expect_geq(p.n_stored, 4.0 * (double)ne, "at least the 4 lowest planes stored: %.0f bytes", p.n_stored);
@@ -83,13 +83,13 @@ Test(h5_pack, regular_and_random_bytes)
     cr_assert(b);
     cr_assert_eq(cd_h5_packer_init(&p, n), 0);
     memset(b, 2, n);
-    len = cd_h5_pack(&p, b, n, 1);
+    len = cd_h5_pack(&p, b, n, n, 1);
     cr_assert_gt(len, 0);
     expect_round_trip(&p, len, b, n, 1);
     cr_expect_lt(len, n / 100, "a constant chunk: %zu bytes", len);
     for (i = 0; i < n; i++) b[i] = (unsigned char)(lcg(&s) & 0xff);
     p.n_stored = p.n_deflated = 0;
-    len = cd_h5_pack(&p, b, n, 1);
+    len = cd_h5_pack(&p, b, n, n, 1);
     cr_assert_gt(len, 0);
     expect_round_trip(&p, len, b, n, 1);
     cr_expect_eq(p.n_stored, (double)n, "random bytes are stored");
@@ -105,8 +105,35 @@ Test(h5_pack, refuses_what_it_cannot_pack)
     unsigned char b[64] = {0};
     cd_h5_packer p;
     cr_assert_eq(cd_h5_packer_init(&p, 32), 0);
-    cr_expect_eq(cd_h5_pack(&p, b, 64, 8), 0);
-    cr_expect_eq(cd_h5_pack(&p, b, 30, 8), 0);
-    cr_expect_gt(cd_h5_pack(&p, b, 32, 8), 0);
+    cr_expect_eq(cd_h5_pack(&p, b, 64, 64, 8), 0);
+    cr_expect_eq(cd_h5_pack(&p, b, 30, 30, 8), 0);
+    cr_expect_eq(cd_h5_pack(&p, b, 32, 40, 8), 0);
+    cr_expect_gt(cd_h5_pack(&p, b, 32, 32, 8), 0);
     cd_h5_packer_free(&p);
+}
+
+Test(h5_pack, a_partly_filled_chunk_stores_only_its_rows)
+{
+    /* a chunk of 8192 doubles of which the first 1000 hold noise and the
+     * rest are the zeros of rows not yet written: the noisy planes are
+     * stored for the 1000 elements only, the zero tails deflated, so the
+     * stream is far below the chunk's 64 KiB (it was the whole chunk when the
+     * choice covered the tail too, and every rewrite of a growing chunk left
+     * a dead copy that large in the file); and it inflates to the chunk */
+    const size_t ne = 8192, nd = 1000, n = ne * sizeof(double);
+    double *x = calloc(ne, sizeof(double));
+    cd_h5_packer p;
+    uint64_t s = 3;
+    size_t i, len;
+    cr_assert(x);
+    for (i = 0; i < nd; i++) x[i] = (double)(lcg(&s) % 1000003) * 1e-3 + 1.0;
+    cr_assert_eq(cd_h5_packer_init(&p, n), 0);
+    len = cd_h5_pack(&p, (const unsigned char *)x, n, nd * sizeof(double), sizeof(double));
+    cr_assert_gt(len, 0);
+    expect_round_trip(&p, len, (const unsigned char *)x, n, sizeof(double));
+    cr_expect_gt(p.n_stored, 0.0, "noisy planes stored");
+    cr_expect_leq(p.n_stored, 8.0 * (double)nd, "only the data's bytes stored: %.0f", p.n_stored);
+    cr_expect_lt(len, 8 * nd + 1024, "%zu bytes for %zu of data", len, 8 * nd);
+    cd_h5_packer_free(&p);
+    free(x);
 }

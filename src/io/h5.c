@@ -16,8 +16,9 @@
  *     counters /committed_events and /committed_samples (the latter last)
  *     in place and flushes again. Readers trust only committed rows.
  *  2. Space is never reused (file space strategy NONE). A commit rewrites
- *     the last, partly filled chunk of every series; a deflated chunk that
- *     grew moves to new space. With HDF5's default strategy the space it
+ *     the last, partly filled chunk of every series; a deflated chunk whose
+ *     size changed moves to new space (one of the same size is rewritten
+ *     in place). With HDF5's default strategy the space it
  *     left was handed to the next chunk written in the same commit while
  *     the chunk index on disk still pointed there: a kill before the index
  *     was flushed left committed rows that no longer decompressed, or read
@@ -118,6 +119,9 @@
  * rows appended after a failure) when that keeps chunks under 4 MiB. */
 #define CD_H5_MAX_CHUNKS 60
 #define CD_H5_MAX_CHUNK_BYTES (4u << 20)
+/* The series whose chunks capdyn packs itself (alloc_buffers, h5_pack.c). */
+#define CD_H5_PACK_CHUNK_MAX (1u << 20)
+#define CD_H5_PACK_TOTAL_MAX (32u << 20)
 /* Room a commit keeps beyond its own estimate: metadata (chunk index nodes,
  * object header continuations) and the closing attributes. */
 #define CD_H5_SPACE_MARGIN (512.0 * 1024.0)
@@ -186,6 +190,9 @@ struct cd_h5_writer {
     long long expect_rows;        /* samples the run expects (duration / output_dt + 2), 0 if unknown */
     int compress;                 /* deflate the sample series (simulation.compress, default 1) */
     cd_h5_packer pack;            /* compress: the chunks' shuffle + deflate (h5_pack.c) */
+    hid_t fail_dset;              /* a packed chunk whose write failed (fail_len > 0): its */
+    long long fail_off;           /* dataset, first row, and stream (still in pack.out) */
+    size_t fail_len;
     /* The file is written under a temporary name until its first commit
      * (the layout and the first sample) is flushed: claim_tmp is that name,
      * claim_target the name it then takes (NULL once renamed). */
@@ -668,8 +675,9 @@ static signed char *row_i8(cd_h5_writer *w, int si)
  * rewrites that chunk (rule 2); a chunk of pending rows only is packed
  * from the buffer. A chunk that does not pack goes through HDF5's own
  * filters. */
-static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
+static int write_chunks(cd_h5_writer *w, h5_series *s, long long start, int n)
 {
+    cd_h5_packer *p = &w->pack;
     const size_t rowbytes = s->rowlen * type_size(s->type);
     const size_t bytes = (size_t)s->chunk_rows * rowbytes;
     long long c, c0 = start / s->chunk_rows, c1 = (start + n - 1) / s->chunk_rows;
@@ -686,9 +694,16 @@ static int write_chunks(cd_h5_packer *p, h5_series *s, long long start, int n)
                    (size_t)(b - a) * rowbytes);
             memset(s->chunk + (size_t)(b - r0) * rowbytes, 0, (size_t)(r1 - b) * rowbytes);
         }
-        len = cd_h5_pack(p, raw, bytes, type_size(s->type));
+        len = cd_h5_pack(p, raw, bytes, (size_t)(b - r0) * rowbytes, type_size(s->type));
         if (len > 0) {
-            if (H5Dwrite_chunk(s->dset, H5P_DEFAULT, 0, off, len, p->out) < 0) return -1;
+            if (H5Dwrite_chunk(s->dset, H5P_DEFAULT, 0, off, len, p->out) < 0) {
+                /* kept for the close (writer_free): the space is allocated,
+                 * the write did not happen */
+                w->fail_dset = s->dset;
+                w->fail_off = r0;
+                w->fail_len = len;
+                return -1;
+            }
         } else { /* through HDF5's filters: the chunk's rows from its start */
             hsize_t cnt[3];
             hid_t fs = H5Dget_space(s->dset), ms;
@@ -719,7 +734,7 @@ static int write_rows(cd_h5_writer *w, h5_series *s, long long start, int n)
     dims[2] = s->tail[1];
     if (H5Dset_extent(s->dset, dims) < 0) return -1;
     if (n == 0) return 0;
-    if (s->chunk) return write_chunks(&w->pack, s, start, n);
+    if (s->chunk) return write_chunks(w, s, start, n);
     off[0] = (hsize_t)start;
     cnt[0] = (hsize_t)n;
     cnt[1] = s->tail[0];
@@ -1077,46 +1092,35 @@ void cd_h5_writer_set_space_check(cd_h5_writer *w, int on, double reserve)
  * as the failure left it: its last commit plus what the failed flush got
  * out) nor fail. A close that fails would leave the file in HDF5's id
  * table half destroyed, and HDF5's clean-up at exit (or H5close) would then
- * crash on it. The descriptor goes to an unnamed temporary file (tmpfile;
- * /dev/null if there is none): HDF5 ends a close by truncating the file to
- * its end of allocation, which /dev/null refuses (EINVAL) when a chunk
- * written directly (H5Dwrite_chunk) failed after its space was allocated,
- * and the close then failed. Reads there give zeros; everything a close
- * needs is in HDF5's caches for files of this size. */
+ * crash on it. Reads of /dev/null give zeros; everything a close needs is
+ * in HDF5's caches for files of this size. */
 static void detach_file(cd_h5_writer *w)
 {
     void *h = NULL;
-    int sink = -1;
-    FILE *tf;
+    int sink;
     if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &h) < 0 || !h) return;
-    tf = tmpfile();
-    if (tf) {
-        sink = dup(fileno(tf));
-        fclose(tf);
-    }
-    if (sink < 0) sink = open("/dev/null", O_RDWR);
+    sink = open("/dev/null", O_RDWR);
     if (sink < 0) return;
     (void)dup2(sink, *(int *)h);
     close(sink);
+    /* A packed chunk whose write failed (write_chunks) had its file space
+     * allocated: HDF5's end of allocation is then past the end of file it
+     * wrote, and its close would truncate the file up to it, which
+     * /dev/null refuses (EINVAL): the close failed. Written again, now to
+     * /dev/null, the chunk takes new space at the end and its write
+     * succeeds, so that the two ends agree again, as after a write HDF5
+     * makes from its chunk cache, which the close writes once more. */
+    if (w->fail_len > 0) {
+        hsize_t off[3] = {(hsize_t)w->fail_off, 0, 0};
+        (void)H5Dwrite_chunk(w->fail_dset, H5P_DEFAULT, 0, off, w->fail_len, w->pack.out);
+    }
 }
 
 static void writer_free(cd_h5_writer *w)
 {
-    int i, lifted = 0;
-    struct rlimit rl0;
+    int i;
     if (!w) return;
-    if (w->failed && w->file >= 0) {
-        detach_file(w);
-        /* the close extends the (temporary, sparse) file to the end of
-         * allocation: a write refused by the file size limit (ulimit -f)
-         * must not make it fail too, so the soft limit is lifted to the hard
-         * one for the close, which writes nothing to the results file */
-        if (getrlimit(RLIMIT_FSIZE, &rl0) == 0 && rl0.rlim_cur != rl0.rlim_max) {
-            struct rlimit rl = rl0;
-            rl.rlim_cur = rl.rlim_max;
-            lifted = setrlimit(RLIMIT_FSIZE, &rl) == 0;
-        }
-    }
+    if (w->failed && w->file >= 0) detach_file(w);
     for (i = 0; i < w->nser; i++) {
         if (w->ser[i].dset >= 0) H5Dclose(w->ser[i].dset);
         free(w->ser[i].buf);
@@ -1134,7 +1138,6 @@ static void writer_free(cd_h5_writer *w)
     if (w->mode_enum >= 0) H5Tclose(w->mode_enum);
     if (w->owner_enum >= 0) H5Tclose(w->owner_enum);
     if (w->file >= 0) H5Fclose(w->file);
-    if (lifted) (void)setrlimit(RLIMIT_FSIZE, &rl0);
     if (!w->failed && w->file >= 0) trim_to_eoa(w->lock_fd);
     /* a file that never got its name holds no committed sample */
     if (w->claim_tmp && !w->claim_keep) unlink(w->claim_tmp);
@@ -1402,19 +1405,24 @@ static int alloc_buffers(cd_h5_writer *w)
         if (!w->ser[i].buf) { w->oom = 1; return -1; }
     }
     /* compressed: the writer packs the chunks itself (h5_pack.c) when the
-     * file's types are the memory's bytes (a little-endian host) */
+     * file's types are the memory's bytes (a little-endian host), for the
+     * series whose chunks are at most CD_H5_PACK_CHUNK_MAX bytes, up to
+     * CD_H5_PACK_TOTAL_MAX bytes of chunks in all: each keeps a copy of its
+     * last chunk. The others (the wide series of a long run, whose chunks
+     * grow to hold it in 60) go through HDF5's filters, whose chunk cache
+     * holds 1 MiB per dataset. */
     if (w->compress && H5Tequal(H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE) > 0 &&
         H5Tequal(H5T_NATIVE_LLONG, H5T_STD_I64LE) > 0) {
-        size_t most = 0;
+        size_t most = 0, total = 0;
         for (i = 0; i < w->nser; i++) {
             size_t b = (size_t)w->ser[i].chunk_rows * w->ser[i].rowlen * type_size(w->ser[i].type);
+            if (b > CD_H5_PACK_CHUNK_MAX || total + b > CD_H5_PACK_TOTAL_MAX) continue;
+            w->ser[i].chunk = calloc(b, 1);
+            if (!w->ser[i].chunk) { w->oom = 1; return -1; }
+            total += b;
             if (b > most) most = b;
         }
-        if (cd_h5_packer_init(&w->pack, most) < 0) { w->oom = 1; return -1; }
-        for (i = 0; i < w->nser; i++) {
-            w->ser[i].chunk = calloc((size_t)w->ser[i].chunk_rows * w->ser[i].rowlen, type_size(w->ser[i].type));
-            if (!w->ser[i].chunk) { w->oom = 1; return -1; }
-        }
+        if (most > 0 && cd_h5_packer_init(&w->pack, most) < 0) { w->oom = 1; return -1; }
     }
     return 0;
 }

@@ -68,13 +68,28 @@ int cd_h5_packer_init(cd_h5_packer *p, size_t max_bytes)
     return 0;
 }
 
-size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t elem)
+/* deflates n bytes at b at the given level (0: stored) into the stream */
+static int put(cd_h5_packer *p, const unsigned char *b, size_t n, int level)
 {
-    size_t ne, k, j, plane;
+    z_stream *z = &p->zs;
+    if (n == 0) return 0;
+    if (deflateParams(z, level, Z_DEFAULT_STRATEGY) != Z_OK) return -1;
+    z->next_in = b;
+    z->avail_in = (uInt)n;
+    if (deflate(z, Z_NO_FLUSH) != Z_OK || z->avail_in != 0) return -1;
+    if (level) p->n_deflated += (double)n;
+    else p->n_stored += (double)n;
+    return 0;
+}
+
+size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t nfill, size_t elem)
+{
+    size_t ne, nf, k, j, plane;
     const unsigned char *src = raw;
     z_stream *z = &p->zs;
-    if (!p->zs_ok || n > p->cap || elem == 0 || n % elem) return 0;
+    if (!p->zs_ok || n > p->cap || elem == 0 || n % elem || nfill > n) return 0;
     ne = n / elem;
+    nf = (nfill + elem - 1) / elem; /* elements holding data */
     if (elem == 8) { /* HDF5's shuffle: byte k of element j goes to k * ne + j */
         unsigned char *d0 = p->shuf, *d1 = d0 + ne, *d2 = d1 + ne, *d3 = d2 + ne, *d4 = d3 + ne, *d5 = d4 + ne,
                       *d6 = d5 + ne, *d7 = d6 + ne;
@@ -93,21 +108,17 @@ size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t el
         src = p->shuf;
     }
     plane = elem > 1 ? ne : n;
+    if (elem == 1) nf = nfill;
     if (deflateReset(z) != Z_OK) return 0;
     z->next_out = p->out;
     z->avail_out = (uInt)p->cap_out;
     for (k = 0; k * plane < n; k++) {
         const unsigned char *b = src + k * plane;
-        /* the entropy of the plane's first quarter (all of a short plane):
+        /* the entropy of the data's first quarter (all of a short plane):
          * every column of the rows it holds, at a quarter of the cost */
-        const size_t probe = plane / 4 > 4096 ? plane / 4 : plane;
+        const size_t probe = nf / 4 > 4096 ? nf / 4 : nf;
         const int level = cd_h5_byte_entropy(b, probe) < CD_PACK_H_STORE ? 1 : 0;
-        if (deflateParams(z, level, Z_DEFAULT_STRATEGY) != Z_OK) return 0;
-        z->next_in = b;
-        z->avail_in = (uInt)plane;
-        if (deflate(z, Z_NO_FLUSH) != Z_OK || z->avail_in != 0) return 0;
-        if (level) p->n_deflated += (double)plane;
-        else p->n_stored += (double)plane;
+        if (put(p, b, nf, level) < 0 || put(p, b + nf, plane - nf, 1) < 0) return 0;
     }
     if (deflate(z, Z_FINISH) != Z_STREAM_END) return 0;
     return (size_t)(p->cap_out - z->avail_out);

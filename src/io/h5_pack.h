@@ -31,9 +31,12 @@ void cd_h5_packer_free(cd_h5_packer *p);
 
 /* Shuffles n raw bytes of elements of elem bytes (HDF5's shuffle filter:
  * byte plane k holds byte k of every element; none for elem 1) and deflates
- * them into p->out as one zlib stream. Returns its size, or 0 when it does
- * not fit (the caller then writes the chunk through HDF5's own filters). */
-size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t elem);
+ * them into p->out as one zlib stream. The first nfill bytes hold data, the
+ * rest are zeros (the unfilled rows of a partly filled chunk): each plane's
+ * choice is made on its data, and its zero tail is deflated. Returns the
+ * stream's size, or 0 when it does not fit (the caller then writes the
+ * chunk through HDF5's own filters). */
+size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t nfill, size_t elem);
 
 /* The Shannon entropy in bits per byte of the byte histogram of b[0..n). */
 double cd_h5_byte_entropy(const unsigned char *b, size_t n);
