@@ -119,9 +119,6 @@
  * rows appended after a failure) when that keeps chunks under 4 MiB. */
 #define CD_H5_MAX_CHUNKS 60
 #define CD_H5_MAX_CHUNK_BYTES (4u << 20)
-/* The series whose chunks capdyn packs itself (alloc_buffers, h5_pack.c). */
-#define CD_H5_PACK_CHUNK_MAX (1u << 20)
-#define CD_H5_PACK_TOTAL_MAX (32u << 20)
 /* Room a commit keeps beyond its own estimate: metadata (chunk index nodes,
  * object header continuations) and the closing attributes. */
 #define CD_H5_SPACE_MARGIN (512.0 * 1024.0)
@@ -1404,25 +1401,22 @@ static int alloc_buffers(cd_h5_writer *w)
         w->ser[i].buf = malloc((size_t)w->cap_rows * w->ser[i].rowlen * type_size(w->ser[i].type));
         if (!w->ser[i].buf) { w->oom = 1; return -1; }
     }
-    /* compressed: the writer packs the chunks itself (h5_pack.c) when the
-     * file's types are the memory's bytes (a little-endian host), for the
-     * series whose chunks are at most CD_H5_PACK_CHUNK_MAX bytes, up to
-     * CD_H5_PACK_TOTAL_MAX bytes of chunks in all: each keeps a copy of its
-     * last chunk. The others (the wide series of a long run, whose chunks
-     * grow to hold it in 60) go through HDF5's filters, whose chunk cache
-     * holds 1 MiB per dataset. */
+    /* compressed: the writer packs the chunks of every series itself
+     * (h5_pack.c) when the file's types are the memory's bytes (a
+     * little-endian host); each series keeps a copy of its last chunk. All
+     * of them: a chunk HDF5 wrote from its filters straight to the file (one
+     * larger than its 1 MiB chunk cache) and whose write failed could not be
+     * written again at the close, which then failed (detach_file). */
     if (w->compress && H5Tequal(H5T_NATIVE_DOUBLE, H5T_IEEE_F64LE) > 0 &&
         H5Tequal(H5T_NATIVE_LLONG, H5T_STD_I64LE) > 0) {
-        size_t most = 0, total = 0;
+        size_t most = 0;
         for (i = 0; i < w->nser; i++) {
             size_t b = (size_t)w->ser[i].chunk_rows * w->ser[i].rowlen * type_size(w->ser[i].type);
-            if (b > CD_H5_PACK_CHUNK_MAX || total + b > CD_H5_PACK_TOTAL_MAX) continue;
             w->ser[i].chunk = calloc(b, 1);
             if (!w->ser[i].chunk) { w->oom = 1; return -1; }
-            total += b;
             if (b > most) most = b;
         }
-        if (most > 0 && cd_h5_packer_init(&w->pack, most) < 0) { w->oom = 1; return -1; }
+        if (cd_h5_packer_init(&w->pack, most) < 0) { w->oom = 1; return -1; }
     }
     return 0;
 }
