@@ -1098,7 +1098,10 @@ static void detach_file(cd_h5_writer *w)
     if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &h) < 0 || !h) return;
     sink = open("/dev/null", O_RDWR);
     if (sink < 0) return;
-    (void)dup2(sink, *(int *)h);
+    if (dup2(sink, *(int *)h) < 0) { /* still the real file: write nothing more to it */
+        close(sink);
+        return;
+    }
     close(sink);
     /* A packed chunk whose write failed (write_chunks) had its file space
      * allocated: HDF5's end of allocation is then past the end of file it
