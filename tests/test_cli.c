@@ -705,6 +705,49 @@ static void quota_child(const char *sc, const char *h5, int no_compress, long nc
     _exit(0);
 }
 
+/* Forks quota_child on the Fig. 3 scenario writing h5 and asserts that it
+ * ran all its checks. */
+static void run_quota_child(const char *h5, int no_compress, long ncommit, double dt)
+{
+    char sc[512];
+    pid_t pid;
+    int ws;
+    scen(sc, sizeof sc, "paper_fig3_impact.toml");
+    fflush(NULL);
+    pid = fork();
+    cr_assert(pid >= 0);
+    if (pid == 0) quota_child(sc, h5, no_compress, ncommit, dt);
+    cr_assert_eq(waitpid(pid, &ws, 0), pid);
+    cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
+              WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
+}
+
+/* `capdyn info` reads h5 (exit 0) with ncommit committed samples and a
+ * status that is not "ok", and /time holds them at the times they were
+ * taken (k dt: cd_sim_advance stops exactly at its target time). */
+static void expect_committed_samples(const char *dir, const char *h5, long ncommit, double dt)
+{
+    char st[600], *out = NULL, *err = NULL;
+    int rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
+    long k;
+    hid_t f;
+    size_t n;
+    double *t;
+    cr_assert_eq(rc, 0, "capdyn info: %s", err);
+    cr_expect_eq(info_samples(out), ncommit, "the committed samples: %s", out);
+    info_status(out, st, sizeof st);
+    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
+    free(out);
+    free(err);
+    f = open_ro(h5);
+    cr_assert(f >= 0);
+    t = read_all(f, "/time", &n);
+    cr_assert_geq(n, (size_t)ncommit);
+    for (k = 0; k < ncommit; k++) cr_assert_eq(t[k], (double)k * dt, "t[%ld] = %.17g", k, t[k]);
+    free(t);
+    H5Fclose(f);
+}
+
 Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
 {
     /* A write that fails where no check can foresee it (a disk quota): the
@@ -718,25 +761,13 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
      * from its cache and fails there. The compressed writer writes its own
      * chunks (src/io/h5_pack.c) and leaves no truncated file:
      * a_failed_chunk_write_leaves_a_file_that_reads_as_committed. */
-    char dir[64], sc[512], h5[256], st[600], *out = NULL, *err = NULL, want[400];
-    pid_t pid;
-    int rc, ws;
-    long ns, k;
+    char dir[64], h5[256], *out = NULL, *err = NULL, want[400];
+    int rc;
     const long ncommit = 2000;
     const double dt = 1e-4;
-    hid_t f;
-    size_t n;
-    double *t;
     make_tmpdir(dir, sizeof dir);
-    scen(sc, sizeof sc, "paper_fig3_impact.toml");
     snprintf(h5, sizeof h5, "%s/quota.h5", dir);
-    fflush(NULL);
-    pid = fork();
-    cr_assert(pid >= 0);
-    if (pid == 0) quota_child(sc, h5, 1, ncommit, dt);
-    cr_assert_eq(waitpid(pid, &ws, 0), pid);
-    cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
-              WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
+    run_quota_child(h5, 1, ncommit, dt);
 
     rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
     cr_expect_eq(rc, 1, "exit %d", rc);
@@ -747,22 +778,7 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
     free(err);
 
     cr_assert_eq(h5clear(h5), 0, "h5clear --increment=0");
-    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
-    cr_assert_eq(rc, 0, "capdyn info after h5clear: %s", err);
-    ns = info_samples(out);
-    info_status(out, st, sizeof st);
-    cr_expect_eq(ns, ncommit, "the committed samples are back: %s", out);
-    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
-    free(out);
-    free(err);
-    f = open_ro(h5);
-    cr_assert(f >= 0);
-    t = read_all(f, "/time", &n);
-    cr_assert_geq(n, (size_t)ncommit);
-    /* cd_sim_advance stops exactly at its target time */
-    for (k = 0; k < ncommit; k++) cr_assert_eq(t[k], (double)k * dt, "t[%ld] = %.17g", k, t[k]);
-    free(t);
-    H5Fclose(f);
+    expect_committed_samples(dir, h5, ncommit, dt); /* they are back */
     rc = capdyn(dir, &out, NULL, "export", h5, "time", (char *)NULL);
     cr_expect_eq(rc, 0);
     {
@@ -782,39 +798,13 @@ Test(cli, a_failed_chunk_write_leaves_a_file_that_reads_as_committed, .timeout =
      * crashing (H5close after it), and the file reads as it was at its last
      * commit without any recovery: `capdyn info` exits 0 with the 2000
      * samples, at the times they were taken, and a status that is not "ok". */
-    char dir[64], sc[512], h5[256], st[600], *out = NULL, *err = NULL;
-    pid_t pid;
-    int rc, ws;
-    long k;
+    char dir[64], h5[256];
     const long ncommit = 2000;
     const double dt = 1e-4;
-    hid_t f;
-    size_t n;
-    double *t;
     make_tmpdir(dir, sizeof dir);
-    scen(sc, sizeof sc, "paper_fig3_impact.toml");
     snprintf(h5, sizeof h5, "%s/quota.h5", dir);
-    fflush(NULL);
-    pid = fork();
-    cr_assert(pid >= 0);
-    if (pid == 0) quota_child(sc, h5, 0, ncommit, dt);
-    cr_assert_eq(waitpid(pid, &ws, 0), pid);
-    cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
-              WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
-    rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
-    cr_assert_eq(rc, 0, "capdyn info without recovery: %s", err);
-    cr_expect_eq(info_samples(out), ncommit, "the committed samples: %s", out);
-    info_status(out, st, sizeof st);
-    cr_expect(strncmp(st, "ok", 2) != 0, "status is not ok: '%s'", st);
-    free(out);
-    free(err);
-    f = open_ro(h5);
-    cr_assert(f >= 0);
-    t = read_all(f, "/time", &n);
-    cr_assert_geq(n, (size_t)ncommit);
-    for (k = 0; k < ncommit; k++) cr_assert_eq(t[k], (double)k * dt, "t[%ld] = %.17g", k, t[k]);
-    free(t);
-    H5Fclose(f);
+    run_quota_child(h5, 0, ncommit, dt);
+    expect_committed_samples(dir, h5, ncommit, dt); /* without any recovery */
     rm_rf(dir);
 }
 
@@ -1213,14 +1203,16 @@ static herr_t list_ds(hid_t obj, const char *name, const H5O_info_t *info, void 
 /* The bytes of dataset name of f in its native type (malloc'd), and their count. */
 static unsigned char *read_bytes(hid_t f, const char *name, size_t *nb, int *nfilters)
 {
-    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT), ft, mt, pl;
+    hid_t ds = H5Dopen2(f, name, H5P_DEFAULT), ft, mt, pl, sp;
     unsigned char *b = NULL;
     *nb = 0;
     *nfilters = -1;
     if (ds < 0) return NULL;
     ft = H5Dget_type(ds);
     mt = H5Tget_native_type(ft, H5T_DIR_ASCEND);
-    *nb = (size_t)H5Sget_simple_extent_npoints(H5Dget_space(ds)) * H5Tget_size(mt);
+    sp = H5Dget_space(ds);
+    *nb = (size_t)H5Sget_simple_extent_npoints(sp) * H5Tget_size(mt);
+    H5Sclose(sp);
     b = calloc(*nb + 1, 1);
     if (b && H5Dread(ds, mt, H5S_ALL, H5S_ALL, H5P_DEFAULT, b) < 0) { free(b); b = NULL; }
     pl = H5Dget_create_plist(ds);

@@ -664,6 +664,25 @@ static signed char *row_i8(cd_h5_writer *w, int si)
     return (signed char *)(s->buf + (size_t)w->nbuf * s->rowlen);
 }
 
+/* Writes nrows rows from buf at row row0 of series s through HDF5 (its
+ * filters, if the dataset has them). */
+static int write_slab(const h5_series *s, long long row0, long long nrows, const void *buf)
+{
+    hsize_t off[3] = {(hsize_t)row0, 0, 0}, cnt[3];
+    hid_t fs = H5Dget_space(s->dset), ms;
+    herr_t r;
+    if (fs < 0) return -1;
+    cnt[0] = (hsize_t)nrows;
+    cnt[1] = s->tail[0];
+    cnt[2] = s->tail[1];
+    if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
+    ms = H5Screate_simple(s->rank, cnt, NULL);
+    r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, buf) : -1;
+    if (ms >= 0) H5Sclose(ms);
+    H5Sclose(fs);
+    return r < 0 ? -1 : 0;
+}
+
 /* Writes rows [start, start + n) of series s, whose chunks the writer packs
  * itself (h5_pack.c): every chunk they touch is written whole
  * (H5Dwrite_chunk, all filters applied), the rows it had before from
@@ -701,20 +720,8 @@ static int write_chunks(cd_h5_writer *w, h5_series *s, long long start, int n)
                 w->fail_len = len;
                 return -1;
             }
-        } else { /* through HDF5's filters: the chunk's rows from its start */
-            hsize_t cnt[3];
-            hid_t fs = H5Dget_space(s->dset), ms;
-            herr_t r;
-            if (fs < 0) return -1;
-            cnt[0] = (hsize_t)(b - r0);
-            cnt[1] = s->tail[0];
-            cnt[2] = s->tail[1];
-            if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
-            ms = H5Screate_simple(s->rank, cnt, NULL);
-            r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, raw) : -1;
-            if (ms >= 0) H5Sclose(ms);
-            H5Sclose(fs);
-            if (r < 0) return -1;
+        } else if (write_slab(s, r0, b - r0, raw) < 0) { /* through HDF5's filters: the chunk's rows */
+            return -1;
         }
     }
     return 0;
@@ -723,27 +730,14 @@ static int write_chunks(cd_h5_writer *w, h5_series *s, long long start, int n)
 /* Writes the pending rows of series s at rows [start, start + n). */
 static int write_rows(cd_h5_writer *w, h5_series *s, long long start, int n)
 {
-    hsize_t dims[3], off[3] = {0, 0, 0}, cnt[3];
-    hid_t fs, ms;
-    herr_t r;
+    hsize_t dims[3];
     dims[0] = (hsize_t)(start + n);
     dims[1] = s->tail[0];
     dims[2] = s->tail[1];
     if (H5Dset_extent(s->dset, dims) < 0) return -1;
     if (n == 0) return 0;
     if (s->chunk) return write_chunks(w, s, start, n);
-    off[0] = (hsize_t)start;
-    cnt[0] = (hsize_t)n;
-    cnt[1] = s->tail[0];
-    cnt[2] = s->tail[1];
-    fs = H5Dget_space(s->dset);
-    if (fs < 0) return -1;
-    if (H5Sselect_hyperslab(fs, H5S_SELECT_SET, off, NULL, cnt, NULL) < 0) { H5Sclose(fs); return -1; }
-    ms = H5Screate_simple(s->rank, cnt, NULL);
-    r = ms >= 0 ? H5Dwrite(s->dset, mem_type(s->type), ms, fs, H5P_DEFAULT, s->buf) : -1;
-    if (ms >= 0) H5Sclose(ms);
-    H5Sclose(fs);
-    return r < 0 ? -1 : 0;
+    return write_slab(s, start, n, s->buf);
 }
 
 /* The event table's chunk index exists from the layout on (issue 28). HDF5
@@ -1920,11 +1914,11 @@ cd_status cd_h5_append(cd_h5_writer *w, const cd_model *m, const cd_data *d, cd_
     }
     w->nbuf++;
     fin = check_finite(w, d->t, err); /* the row is kept either way */
-    /* a full buffer commits, and so does a row count that is a multiple of
-     * the buffer's rows (aligned with the widest series' chunks, see
-     * alloc_buffers); so does the first sample, after which the file takes
-     * its name */
-    if (w->nbuf == w->cap_rows || (w->nwritten + w->nbuf) % w->cap_rows == 0 || w->claim_tmp) {
+    /* a row count that is a multiple of the buffer's rows commits (aligned
+     * with the widest series' chunks, see alloc_buffers; it comes within
+     * cap_rows rows of any commit, so the buffer never overflows); so does
+     * the first sample, after which the file takes its name */
+    if ((w->nwritten + w->nbuf) % w->cap_rows == 0 || w->claim_tmp) {
         cd_h5_quiet q;
         cd_status st;
         cd_error cerr;

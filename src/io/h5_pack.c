@@ -84,7 +84,7 @@ static int put(cd_h5_packer *p, const unsigned char *b, size_t n, int level)
 
 size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t nfill, size_t elem)
 {
-    size_t ne, nf, k, j, plane;
+    size_t ne, nf, k, j;
     const unsigned char *src = raw;
     z_stream *z = &p->zs;
     if (!p->zs_ok || n > p->cap || elem == 0 || n % elem || nfill > n) return 0;
@@ -107,18 +107,16 @@ size_t cd_h5_pack(cd_h5_packer *p, const unsigned char *raw, size_t n, size_t nf
         }
         src = p->shuf;
     }
-    plane = elem > 1 ? ne : n;
-    if (elem == 1) nf = nfill;
     if (deflateReset(z) != Z_OK) return 0;
     z->next_out = p->out;
     z->avail_out = (uInt)p->cap_out;
-    for (k = 0; k * plane < n; k++) {
-        const unsigned char *b = src + k * plane;
+    for (k = 0; k < elem; k++) { /* the planes, ne bytes each (one for elem 1) */
+        const unsigned char *b = src + k * ne;
         /* the entropy of the data's first quarter (all of a short plane):
          * every column of the rows it holds, at a quarter of the cost */
         const size_t probe = nf / 4 > 4096 ? nf / 4 : nf;
         const int level = cd_h5_byte_entropy(b, probe) < CD_PACK_H_STORE ? 1 : 0;
-        if (put(p, b, nf, level) < 0 || put(p, b + nf, plane - nf, 1) < 0) return 0;
+        if (put(p, b, nf, level) < 0 || put(p, b + nf, ne - nf, 1) < 0) return 0;
     }
     if (deflate(z, Z_FINISH) != Z_STREAM_END) return 0;
     return (size_t)(p->cap_out - z->avail_out);
