@@ -11,10 +11,19 @@
  * stability boundary (about 5 for rk8pd on the negative real axis), so the
  * largest |lambda| bounds its step.
  *
- * Usage: stiff_modes SCENARIO.toml T [-n N] [--set KEY=VALUE]...
+ * --gap H also compares that Jacobian with the structured one of the
+ * linearly implicit steppers (src/sim/jac.c, the same unknowns) and prints
+ * the size of what the structured one leaves out, D = J_difference -
+ * J_structured: its Frobenius and 2-norms, h |D|_2 at the step H, and the
+ * rows and columns that carry its largest entries (docs/performance.md
+ * section 19: an order-4 W-method's error expansion in h (J - A) needs
+ * h |D| well below 1).
+ *
+ * Usage: stiff_modes SCENARIO.toml T [-n N] [--gap H] [--set KEY=VALUE]...
  * (run from the repository root; built by `make build/stiff_modes`). */
 #include <capdyn/capdyn.h>
 #include <capdyn/io.h>
+#include "../src/sim/jac.h"
 #include <gsl/gsl_complex_math.h>
 #include <gsl/gsl_eigen.h>
 #include <gsl/gsl_matrix.h>
@@ -52,11 +61,84 @@ static void label(const cd_model *m, int i, char *buf, size_t len)
     else snprintf(buf, len, "%s qd %s", m->sys_name[s], m->body_name[m->sys_body_adr[s] + 1 + off - (fb ? 6 : 0)]);
 }
 
+/* the largest entry of row (by = 0) or column (by = 1) i of the n x n D */
+static double line_max(const double *D, int n, int i, int by)
+{
+    double mx = 0;
+    int k;
+    for (k = 0; k < n; k++) {
+        double v = fabs(by ? D[(size_t)k * n + i] : D[(size_t)i * n + k]);
+        if (v > mx) mx = v;
+    }
+    return mx;
+}
+
+/* --gap: J (the differences) against the structured Jacobian on the same unknowns */
+static int print_gap(const cd_model *m, cd_data *d, const int *act, int na, const gsl_matrix *J, double H)
+{
+    double *Js = (double *)calloc((size_t)na * (size_t)na, sizeof(double)), *x = (double *)malloc(sizeof(double) * (size_t)na);
+    double *u = (double *)malloc(sizeof(double) * (size_t)na), fro = 0, fro_d = 0, n2 = 0;
+    void *mem = malloc(cd_jacw_size(m, na));
+    cd_jacw jw;
+    int i, j, k, by, *done = (int *)calloc((size_t)na, sizeof(int));
+    if (!Js || !x || !u || !mem || !done) { fprintf(stderr, "out of memory\n"); return 1; }
+    cd_jacw_init(&jw, m, na, mem);
+    if (cd_jac_model(m, d, d->t, d->y, act, na, Js, &jw) != CD_OK) { fprintf(stderr, "structured Jacobian failed\n"); return 1; }
+    for (i = 0; i < na; i++)
+        for (j = 0; j < na; j++) {
+            double f = gsl_matrix_get(J, (size_t)i, (size_t)j);
+            Js[(size_t)i * na + j] = f - Js[(size_t)i * na + j]; /* now D */
+            fro += f * f;
+            fro_d += Js[(size_t)i * na + j] * Js[(size_t)i * na + j];
+        }
+    for (i = 0; i < na; i++) x[i] = 1.0 / (1 + i % 5);
+    for (k = 0; k < 100; k++) { /* |D|_2 by power iteration on D^T D */
+        double nx = 0;
+        for (i = 0; i < na; i++) nx += x[i] * x[i];
+        nx = sqrt(nx);
+        if (!(nx > 0)) break;
+        for (i = 0; i < na; i++) {
+            u[i] = 0;
+            for (j = 0; j < na; j++) u[i] += Js[(size_t)i * na + j] * x[j] / nx;
+        }
+        for (j = 0; j < na; j++) {
+            x[j] = 0;
+            for (i = 0; i < na; i++) x[j] += Js[(size_t)i * na + j] * u[i];
+        }
+        n2 = 0;
+        for (i = 0; i < na; i++) n2 += u[i] * u[i];
+        n2 = sqrt(n2);
+    }
+    printf("left out of the structured Jacobian: |D|_F %.3g against |J|_F %.3g; |D|_2 %.3g 1/s^2, h |D|_2 = %.3g at h = %g s\n",
+           sqrt(fro_d), sqrt(fro), n2, H * n2, H);
+    for (by = 0; by < 2; by++) {
+        printf("    largest %s of D:\n", by ? "columns" : "rows");
+        for (k = 0; k < 4; k++) {
+            int best = -1;
+            double bv = 0;
+            char buf[160];
+            for (i = 0; i < na; i++)
+                if (!done[i] && line_max(Js, na, i, by) > bv) { bv = line_max(Js, na, i, by); best = i; }
+            if (best < 0) break;
+            done[best] = 1;
+            label(m, act[best], buf, sizeof buf);
+            printf("      %-48s %.3g\n", buf, bv);
+        }
+        memset(done, 0, sizeof(int) * (size_t)na);
+    }
+    free(Js);
+    free(x);
+    free(u);
+    free(mem);
+    free(done);
+    return 0;
+}
+
 int main(int argc, char **argv)
 {
     const char *sets[MAX_SETS];
     int nsets = 0, nshow = 5, i, j, k, na = 0, *act;
-    double T, *y0, *f0;
+    double T, *y0, *f0, gap = 0;
     cd_error err;
     cd_scenario *sc;
     cd_data *d;
@@ -67,12 +149,13 @@ int main(int argc, char **argv)
     gsl_matrix_complex *V;
     gsl_eigen_nonsymmv_workspace *w;
     if (argc < 3) {
-        fprintf(stderr, "usage: %s SCENARIO.toml T [-n N] [--set KEY=VALUE]...\n", argv[0]);
+        fprintf(stderr, "usage: %s SCENARIO.toml T [-n N] [--gap H] [--set KEY=VALUE]...\n", argv[0]);
         return 2;
     }
     T = atof(argv[2]);
     for (i = 3; i < argc; i++) {
         if (!strcmp(argv[i], "-n") && i + 1 < argc) nshow = atoi(argv[++i]);
+        else if (!strcmp(argv[i], "--gap") && i + 1 < argc) gap = atof(argv[++i]);
         else if (!strcmp(argv[i], "--set") && i + 1 < argc && nsets < MAX_SETS) sets[nsets++] = argv[++i];
         else { fprintf(stderr, "%s: unknown argument '%s'\n", argv[0], argv[i]); return 2; }
     }
@@ -103,6 +186,8 @@ int main(int argc, char **argv)
         for (i = 0; i < na; i++) gsl_matrix_set(J, (size_t)i, (size_t)j, (d->ydot[act[i]] - f0[act[i]]) / h);
         d->y[act[j]] = y0[act[j]];
     }
+    if (cd_forward(m, d) != CD_OK) { fprintf(stderr, "evaluation failed\n"); return 1; }
+    if (gap > 0 && print_gap(m, d, act, na, J, gap)) return 1;
     ev = gsl_vector_complex_alloc((size_t)na);
     V = gsl_matrix_complex_alloc((size_t)na, (size_t)na);
     w = gsl_eigen_nonsymmv_alloc((size_t)na);
