@@ -665,7 +665,7 @@ Test(cli, a_full_disk_stops_the_run_with_one_error_and_keeps_the_committed_sampl
  * committed samples), the close too, and H5close after it must not crash
  * (on a file left half closed in HDF5's id table). Exits 0, or the number
  * of the check that failed. */
-static void quota_child(const char *sc, const char *h5, int no_compress, long ncommit, double dt)
+static void quota_child(const char *sc, const char *h5, int no_compress, long ncommit, double dt, int no_fds)
 {
     cd_error e;
     char want[32];
@@ -689,6 +689,13 @@ static void quota_child(const char *sc, const char *h5, int no_compress, long nc
     signal(SIGXFSZ, SIG_IGN);
     rl.rlim_cur = rl.rlim_max = (rlim_t)sb.st_size + 8192; /* both, as `ulimit -f` sets them */
     if (setrlimit(RLIMIT_FSIZE, &rl) != 0) _exit(13);
+    if (no_fds) { /* every descriptor the process may have is taken: open() fails from here on */
+        if (getrlimit(RLIMIT_NOFILE, &rl) != 0) _exit(13);
+        rl.rlim_cur = 256 < rl.rlim_max ? 256 : rl.rlim_max;
+        if (setrlimit(RLIMIT_NOFILE, &rl) != 0) _exit(13);
+        while (open("/dev/null", O_RDONLY) >= 0) {}
+        if (errno != EMFILE) _exit(13);
+    }
     cd_h5_writer_set_space_check(w, 0, 0);
     for (; k < 3 * ncommit && r == CD_OK; k++) {
         r = cd_sim_advance(s->model, d, (double)k * dt, NULL, NULL, &e);
@@ -707,7 +714,7 @@ static void quota_child(const char *sc, const char *h5, int no_compress, long nc
 
 /* Forks quota_child on the Fig. 3 scenario writing h5 and asserts that it
  * ran all its checks. */
-static void run_quota_child(const char *h5, int no_compress, long ncommit, double dt)
+static void run_quota_child(const char *h5, int no_compress, long ncommit, double dt, int no_fds)
 {
     char sc[512];
     pid_t pid;
@@ -716,7 +723,7 @@ static void run_quota_child(const char *h5, int no_compress, long ncommit, doubl
     fflush(NULL);
     pid = fork();
     cr_assert(pid >= 0);
-    if (pid == 0) quota_child(sc, h5, no_compress, ncommit, dt);
+    if (pid == 0) quota_child(sc, h5, no_compress, ncommit, dt, no_fds);
     cr_assert_eq(waitpid(pid, &ws, 0), pid);
     cr_assert(WIFEXITED(ws) && WEXITSTATUS(ws) == 0, "the writing child: %s %d", WIFEXITED(ws) ? "exit" : "signal",
               WIFEXITED(ws) ? WEXITSTATUS(ws) : WTERMSIG(ws));
@@ -767,7 +774,7 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
     const double dt = 1e-4;
     make_tmpdir(dir, sizeof dir);
     snprintf(h5, sizeof h5, "%s/quota.h5", dir);
-    run_quota_child(h5, 1, ncommit, dt);
+    run_quota_child(h5, 1, ncommit, dt, 0);
 
     rc = capdyn(dir, &out, &err, "info", h5, (char *)NULL);
     cr_expect_eq(rc, 1, "exit %d", rc);
@@ -789,6 +796,21 @@ Test(cli, info_names_a_truncated_file_and_h5clear_recovers_it, .timeout = 60)
     rm_rf(dir);
 }
 
+/* The compressed writer's chunk write refused by a file size limit after
+ * 2000 committed samples (no_fds: with no descriptor left as well): the
+ * file reads as committed without any recovery. */
+static void committed_after_a_failed_chunk_write(int no_fds)
+{
+    char dir[64], h5[256];
+    const long ncommit = 2000;
+    const double dt = 1e-4;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(h5, sizeof h5, "%s/quota.h5", dir);
+    run_quota_child(h5, 0, ncommit, dt, no_fds);
+    expect_committed_samples(dir, h5, ncommit, dt);
+    rm_rf(dir);
+}
+
 Test(cli, a_failed_chunk_write_leaves_a_file_that_reads_as_committed, .timeout = 60)
 {
     /* The same failure as above with the default, compressed writer, which
@@ -798,14 +820,19 @@ Test(cli, a_failed_chunk_write_leaves_a_file_that_reads_as_committed, .timeout =
      * crashing (H5close after it), and the file reads as it was at its last
      * commit without any recovery: `capdyn info` exits 0 with the 2000
      * samples, at the times they were taken, and a status that is not "ok". */
-    char dir[64], h5[256];
-    const long ncommit = 2000;
-    const double dt = 1e-4;
-    make_tmpdir(dir, sizeof dir);
-    snprintf(h5, sizeof h5, "%s/quota.h5", dir);
-    run_quota_child(h5, 0, ncommit, dt);
-    expect_committed_samples(dir, h5, ncommit, dt); /* without any recovery */
-    rm_rf(dir);
+    committed_after_a_failed_chunk_write(0);
+}
+
+Test(cli, a_failed_chunk_write_with_no_descriptor_left_reads_as_committed, .timeout = 60)
+{
+    /* The same failure when the process has no file descriptor left (its
+     * limit reached before the refused write): the writer cannot open
+     * anything at the close, yet its close must not flush into the file it
+     * failed to write (src/io/h5.c, detach_file: the descriptor it points
+     * the file at was opened when the writer was created). The checks are
+     * those above: CD_EIO, no crash at H5close, and the 2000 committed
+     * samples read back without any recovery. */
+    committed_after_a_failed_chunk_write(1);
 }
 
 Test(cli, more_than_1e9_samples_is_refused)

@@ -171,6 +171,7 @@ struct cd_h5_writer {
     struct timespec wall0;
     char *path;                   /* for messages and the free-space check */
     int lock_fd;                  /* holds flock(LOCK_EX) on the file while it is written */
+    int sink_fd;                  /* /dev/null, opened with the writer for detach_file (-1: none) */
     /* failed: an HDF5 write failed; the file on disk may be damaged beyond
      * its last commit and nothing more is written to it.
      * stopped: the space check refused a commit before writing anything;
@@ -1084,19 +1085,20 @@ void cd_h5_writer_set_space_check(cd_h5_writer *w, int on, double reserve)
  * out) nor fail. A close that fails would leave the file in HDF5's id
  * table half destroyed, and HDF5's clean-up at exit (or H5close) would then
  * crash on it. Reads of /dev/null give zeros; everything a close needs is
- * in HDF5's caches for files of this size. */
+ * in HDF5's caches for files of this size. The /dev/null descriptor was
+ * opened with the writer (sink_fd): a process whose descriptors ran out
+ * before the failure can still detach (test cli::a_failed_chunk_write_with_
+ * no_descriptor_left_reads_as_committed). */
 static void detach_file(cd_h5_writer *w)
 {
     void *h = NULL;
-    int sink;
+    int sink = w->sink_fd, r;
     if (H5Fget_vfd_handle(w->file, H5P_DEFAULT, &h) < 0 || !h) return;
-    sink = open("/dev/null", O_RDWR);
+    if (sink < 0) sink = open("/dev/null", O_RDWR | O_CLOEXEC); /* the writer could not open it */
     if (sink < 0) return;
-    if (dup2(sink, *(int *)h) < 0) { /* still the real file: write nothing more to it */
-        close(sink);
-        return;
-    }
-    close(sink);
+    r = dup2(sink, *(int *)h);
+    if (sink != w->sink_fd) close(sink);
+    if (r < 0) return; /* still the real file: write nothing more to it */
     /* A packed chunk whose write failed (write_chunks) had its file space
      * allocated: HDF5's end of allocation is then past the end of file it
      * wrote, and its close would truncate the file up to it, which
@@ -1138,6 +1140,7 @@ static void writer_free(cd_h5_writer *w)
     free(w->claim_tmp);
     free(w->claim_target);
     if (w->lock_fd >= 0) close(w->lock_fd);
+    if (w->sink_fd >= 0) close(w->sink_fd);
     free(w->path);
     free(w);
 }
@@ -1681,7 +1684,7 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         return NULL;
     }
     w->file = w->ev_dset = w->ev_mtype = w->ev_ftype = w->kind_enum = w->mode_enum = w->owner_enum = -1;
-    w->lock_fd = -1;
+    w->lock_fd = w->sink_fd = -1;
     w->space_check = 1;
     w->path = malloc(strlen(path) + 1);
     if (w->path) strcpy(w->path, path);
@@ -1758,6 +1761,10 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
     c.tmp = c.target = NULL;
     c.lock_fd = -1;
     claim_release(&c);
+    /* opened now: after a failed write the close must not go to the file,
+     * and a process out of descriptors by then could open nothing
+     * (detach_file); when even this open fails, detach_file tries again */
+    w->sink_fd = open("/dev/null", O_RDWR | O_CLOEXEC);
     return w;
 }
 
