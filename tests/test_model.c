@@ -153,6 +153,11 @@ Test(model, system_rejections)
     s.quat[0] = 0;
     clear(&e);
     check_reject(cd_model_add_system(m, &s, &e), 0, &e, "zero quaternion", "'sat'", "quaternion");
+    s = cd_system_desc_default();
+    s.name = "sat";
+    s.mass = 1e-320; /* subnormal: 1/m is inf */
+    clear(&e);
+    check_reject(cd_model_add_system(m, &s, &e), 0, &e, "subnormal mass", "'sat'", "mass");
 
     /* nothing was added by the rejected calls */
     cr_expect(m->nsys == 0 && m->nbody == 0, "rejected systems left %d systems, %d bodies", m->nsys, m->nbody);
@@ -166,6 +171,26 @@ Test(model, system_rejections)
     clear(&e);
     cr_expect(cd_model_add_system(m, &s, &e) == 0, "thin disc rejected: %s", e.msg);
     cr_expect(fabs(m->sys_quat0[0] - 1.0) < 1e-15, "quaternion stored as %g", m->sys_quat0[0]);
+    /* a quaternion whose squared norm overflows (or underflows) is
+     * normalised all the same: (1, 0, 1, 0) / sqrt 2 within an ulp or two */
+    {
+        const double big[2] = {1e200, 1e-200};
+        int k, i;
+        for (k = 0; k < 2; k++) {
+            char nm[16];
+            snprintf(nm, sizeof nm, "q%d", k);
+            s = cd_system_desc_default();
+            s.name = nm;
+            s.quat[0] = s.quat[2] = big[k];
+            s.quat[1] = s.quat[3] = 0;
+            clear(&e);
+            cr_assert(cd_model_add_system(m, &s, &e) >= 0, "quaternion %g rejected: %s", big[k], e.msg);
+            for (i = 0; i < 4; i++)
+                cr_expect(fabs(m->sys_quat0[4 * (m->nsys - 1) + i] - (i % 2 ? 0.0 : sqrt(0.5))) < 4e-16,
+                          "quaternion (%g, 0, %g, 0): component %d stored as %.17g", big[k], big[k], i,
+                          m->sys_quat0[4 * (m->nsys - 1) + i]);
+        }
+    }
     cd_model_free(m);
 }
 

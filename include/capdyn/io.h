@@ -14,6 +14,9 @@ extern "C" {
 #endif
 
 /* ---- scenarios ------------------------------------------------------------ */
+/* The longest title (bytes) a scenario may have: a results file keeps it in
+ * a root attribute (HDF5's object header holds 64 KiB). */
+#define CD_TITLE_MAX 4096
 /* A loaded scenario: a finalized model plus the run settings that are not
  * part of the physics. Strings are owned by the scenario. */
 typedef struct {

@@ -365,10 +365,15 @@ int cmd_check(int argc, char **argv)
     }
     m = sc->model;
     for (s = 0; s < m->nsys; s++) njoint += m->sys_nbody[s] - 1;
-    {   /* the initial pose: an object that starts inside a finger */
+    {   /* the initial pose: an object that starts inside a finger; and the data a run needs */
         cd_data *d = cd_data_create(m, 0, &err);
-        if (d) warn_initial_overlap(o.scenario, m, d);
-        if (d) warn_workspace(o.scenario, sc, d);
+        if (!d) {
+            cli_error("%s: %s", o.scenario, err.msg);
+            cd_scenario_free(sc);
+            return CLI_FAIL;
+        }
+        warn_initial_overlap(o.scenario, m, d);
+        warn_workspace(o.scenario, sc, d);
         cd_data_free(d);
     }
     warn_fast_spin(o.scenario, sc);

@@ -1676,6 +1676,12 @@ cd_h5_writer *cd_h5_create(const char *path, const cd_model *m, const cd_scenari
         seterr(err, CD_EINVAL, "cd_h5_create: path or model missing, or model not finalized");
         return NULL;
     }
+    /* the title is a root attribute, which HDF5 keeps in the object header (64 KiB) */
+    if (sc && sc->title && strlen(sc->title) > CD_TITLE_MAX) {
+        seterr(err, CD_EINVAL, "cannot create results file '%s': the scenario's title is %zu bytes long, at most %d fit",
+               path, strlen(sc->title), CD_TITLE_MAX);
+        return NULL;
+    }
     if (claim_output(path, sc, &c, err) < 0) return NULL;
     w = calloc(1, sizeof *w);
     if (!w) {

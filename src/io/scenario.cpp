@@ -39,6 +39,7 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
+#include <set>
 #include <new>
 #include <string>
 #include <unordered_map>
@@ -728,7 +729,12 @@ std::vector<OvSeg> parse_key_path(const std::string &path, const Loc &L)
         }
         segs.push_back(s);
         if (i < path.size()) {
-            if (path[i] != '.') fail_at(L, "", "bad key path '" + path + "' (unexpected '" + path[i] + "')");
+            if (path[i] != '.') { /* the whole character, not one byte of a UTF-8 sequence */
+                size_t e = i + 1;
+                if ((unsigned char)path[i] >= 0xC0)
+                    while (e < path.size() && ((unsigned char)path[e] & 0xC0) == 0x80) e++;
+                fail_at(L, "", "bad key path '" + path + "' (unexpected '" + path.substr(i, e - i) + "')");
+            }
             i++;
             if (i == path.size()) fail_at(L, "", "bad key path '" + path + "' (ends with '.')");
         }
@@ -865,6 +871,8 @@ double num_of(const Node &n, const std::string &path, Range r)
     else if (n.kind == NK::Float) v = n.fval;
     else fail_at(n.loc, path, std::string("expected ") + range_text(r) + ", got " + render(n));
     bool ok = std::isfinite(v);
+    if (ok && r == Range::Pos && v > 0 && !std::isnormal(v))
+        fail_at(n.loc, path, "expected a positive number of at least 2.2e-308 (a subnormal number has lost its precision), got " + render(n));
     if (ok) switch (r) {
         case Range::Any: break;
         case Range::Pos: ok = v > 0; break;
@@ -1081,8 +1089,12 @@ void rotation_of(const Tab &t, double R[9], const char *extra_exclusive = nullpt
         if (ex) fail_at(ex->kloc, t.kp(extra_exclusive), std::string("give either quaternion or ") + extra_exclusive + ", not both");
         double q[4];
         vec_of(*qu->val, t.kp("quaternion"), 4, q, Range::Any, "an array of 4 numbers [w, x, y, z]");
+        /* normalised after scaling by its largest component: |q|^2 neither overflows nor underflows */
+        double mx = std::max(std::max(std::fabs(q[0]), std::fabs(q[1])), std::max(std::fabs(q[2]), std::fabs(q[3])));
+        if (!(mx > 0)) fail_at(qu->val->loc, t.kp("quaternion"), "expected a non-zero quaternion [w, x, y, z], got " + render(*qu->val));
+        for (double &c : q) c /= mx;
         double nq = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        if (!(nq > 1e-12)) fail_at(qu->val->loc, t.kp("quaternion"), "expected a non-zero quaternion [w, x, y, z], got " + render(*qu->val));
+        for (double &c : q) c /= nq;
         cd_quat_to_m3(R, q);
     }
 }
@@ -1205,6 +1217,7 @@ const std::vector<std::string> LAW_KEYS = {"K", "D", "p", "q", "K_t", "D_t", "p_
 struct Builder {
     std::unique_ptr<cd_model, ModelDel> m;
     std::vector<SysInfo> sys;
+    std::set<std::string> pair_names;
     std::unordered_map<std::string, size_t> sys_at;
     size_t hull_vertices = 0;  /* all convex shapes so far */
     cd_error err{};
@@ -1214,6 +1227,15 @@ struct Builder {
     [[noreturn]] void builder_fail(const Loc &l, const std::string &path)
     {
         fail_at(l, path, err.msg, err.status == CD_ENOMEM ? CD_ENOMEM : CD_EINVAL);
+    }
+    /* a body's builder refused it: at the key its message is about (the
+     * inertia, the mass) when the table gives it, else at the table */
+    [[noreturn]] void body_fail(const Tab &t, const Loc &l, const std::string &path)
+    {
+        for (const char *k : {"inertia", "mass"})
+            if (std::strstr(err.msg, k))
+                if (Entry *e = t.get(k)) builder_fail(e->val->loc, t.kp(k));
+        builder_fail(l, path);
     }
 
     std::vector<std::string> sys_names() const
@@ -1609,7 +1631,7 @@ struct Builder {
             /* enforced as compliant stops (joint_props) */
         }
         int id = cd_model_add_link(m.get(), s.id, &d, &err);
-        if (id < 0) builder_fail(node.loc, path);
+        if (id < 0) body_fail(t, node.loc, path);
         s.add_body(name, id);
         checkpoints(t, s, s.bodies.back());
         shapes(t, s, id);
@@ -2287,7 +2309,7 @@ struct Builder {
             for (double &v : d.angvel) v *= DEG;
         }
         s.id = cd_model_add_system(m.get(), &d, &err);
-        if (s.id < 0) builder_fail(node.loc, path);
+        if (s.id < 0) body_fail(t, node.loc, path);
         if (Entry *e = t.get("prescribed_motion")) {
             if (fixed) fail_at(e->kloc, t.kp("prescribed_motion"), "applies only to a free base (this system has base = \"fixed\")");
             if (bool_of(*e->val, t.kp("prescribed_motion")) && cd_model_prescribe_base(m.get(), s.id, d.vel, d.angvel, &err) != CD_OK)
@@ -2338,6 +2360,9 @@ struct Builder {
             double ks = r.need_num("k_soft", Range::Pos), kr = r.need_num("k_ratio", Range::Pos);
             double me = r.need_num("m_eff", Range::Pos), z = r.num("zeta", 1.0, Range::NonNeg);
             cd_contact_law x = cd_contact_law_from_rule(ks, kr, me, z, l.mu_s);
+            if (!(std::isfinite(x.K) && x.K > 0 && std::isfinite(x.D)))
+                fail_at(rule->kloc, rp, "the rule gives K = k_soft * k_ratio = " + fmt_num(x.K) + " N/m and D = " + fmt_num(x.D) +
+                                           " N s/m; expected finite values (smaller k_soft, k_ratio or m_eff)");
             l.K = x.K;
             l.D = x.D;
         }
@@ -2385,7 +2410,12 @@ struct Builder {
         std::vector<std::string> keys = {"name", "checkpoints", "shape"};
         keys.insert(keys.end(), LAW_KEYS.begin(), LAW_KEYS.end());
         Tab t(&node, path, keys);
-        if (Entry *e = t.get("name")) name_of_node(*e->val, t.kp("name"));
+        if (Entry *e = t.get("name")) {
+            /* overrides address a pair by its name (pair.NAME.K): one pair per name */
+            std::string nm = name_of_node(*e->val, t.kp("name"));
+            if (!pair_names.insert(nm).second)
+                fail_at(e->val->loc, t.kp("name"), "expected a pair name used once, got '" + nm + "' twice");
+        }
         /* checkpoints = "system" or "system/link" ("system/base" for the base body) */
         const Node &cn = t.need("checkpoints", "\"system\" or \"system/link\"");
         std::string cs = str_of(cn, t.kp("checkpoints"));
@@ -2630,6 +2660,9 @@ struct Builder {
         /* title (default: the file name without directory and extension) */
         if (Entry *e = top.get("title")) {
             run.title = str_of(*e->val, "title");
+            if (run.title.size() > CD_TITLE_MAX)
+                fail_at(e->val->loc, "title", "expected a title of at most " + std::to_string(CD_TITLE_MAX) + " bytes, got " +
+                                                   std::to_string(run.title.size()));
         } else {
             run.title = std::filesystem::path(path).stem().string();
         }

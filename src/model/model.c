@@ -3,6 +3,7 @@
 #include "capdyn/model.h"
 #include "../math/cd_math.h"
 
+#include <float.h>
 #include <limits.h>
 #include <stdarg.h>
 #include <stdio.h>
@@ -369,17 +370,19 @@ static int new_body(cd_model *m, const char *name, int sys, int parent, int jtyp
 
 int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
 {
-    int id, n, ok = 0, b;
+    int id, n, ok = 0, b, i;
     const char *why;
-    double z3[3] = {0, 0, 0}, R[9], ax[3] = {0, 0, 1}, qn;
+    double z3[3] = {0, 0, 0}, R[9], ax[3] = {0, 0, 1}, qn, qm, qs[4];
     FROZEN_CHECK(-1);
     if (!s) { seterr(err, CD_EINVAL, "system description is NULL"); return -1; }
     if (s->type != CD_BASE_FREE && s->type != CD_BASE_FIXED) {
         seterr(err, CD_EINVAL, "system '%s': base type must be free or fixed", s->name ? s->name : "");
         return -1;
     }
-    if (!(s->mass > 0) || !isfinite(s->mass)) {
-        seterr(err, CD_EINVAL, "system '%s': base mass must be a positive finite number, got %g",
+    if (!(s->mass >= DBL_MIN) || !isfinite(s->mass)) { /* a subnormal mass has lost its precision (and 1/m is inf) */
+        seterr(err, CD_EINVAL,
+               s->mass > 0 && s->mass < DBL_MIN ? "system '%s': base mass must not be below 2.2e-308 (subnormal), got %g"
+                                                : "system '%s': base mass must be a positive finite number, got %g",
                s->name ? s->name : "", s->mass);
         return -1;
     }
@@ -391,11 +394,17 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
         seterr(err, CD_EINVAL, "system '%s': initial state has a non-finite value", s->name ? s->name : "");
         return -1;
     }
-    qn = sqrt(s->quat[0] * s->quat[0] + s->quat[1] * s->quat[1] + s->quat[2] * s->quat[2] + s->quat[3] * s->quat[3]);
-    if (!(qn > 1e-12)) {
+    /* normalised after scaling by its largest component, so that |q|^2
+     * neither overflows (1e200) nor underflows */
+    qm = 0;
+    for (i = 0; i < 4; i++)
+        if (fabs(s->quat[i]) > qm) qm = fabs(s->quat[i]);
+    if (!(qm > 0)) {
         seterr(err, CD_EINVAL, "system '%s': base quaternion is zero", s->name ? s->name : "");
         return -1;
     }
+    for (i = 0; i < 4; i++) qs[i] = s->quat[i] / qm;
+    qn = sqrt(qs[0] * qs[0] + qs[1] * qs[1] + qs[2] * qs[2] + qs[3] * qs[3]);
     id = m->nsys;
     n = id + 1;
     ok |= RS(m->sys_name, n); ok |= RS(m->sys_base_type, n); ok |= RS(m->sys_body_adr, n);
@@ -409,10 +418,10 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
     m->sys_body_adr[id] = m->nbody;
     m->sys_nbody[id] = 1;
     cd_v3_copy(m->sys_pos0 + 3 * id, s->pos);
-    m->sys_quat0[4 * id] = s->quat[0] / qn;
-    m->sys_quat0[4 * id + 1] = s->quat[1] / qn;
-    m->sys_quat0[4 * id + 2] = s->quat[2] / qn;
-    m->sys_quat0[4 * id + 3] = s->quat[3] / qn;
+    m->sys_quat0[4 * id] = qs[0] / qn;
+    m->sys_quat0[4 * id + 1] = qs[1] / qn;
+    m->sys_quat0[4 * id + 2] = qs[2] / qn;
+    m->sys_quat0[4 * id + 3] = qs[3] / qn;
     cd_v3_copy(m->sys_vel0 + 3 * id, s->vel);
     cd_v3_copy(m->sys_angvel0 + 3 * id, s->angvel);
     m->nsys++;
@@ -450,8 +459,11 @@ int cd_model_add_link(cd_model *m, int sys, const cd_link_desc *l, cd_error *err
         seterr(err, CD_EINVAL, "link %s: joint type must be revolute or prismatic", nm);
         return -1;
     }
-    if (!(l->mass > 0) || !isfinite(l->mass)) {
-        seterr(err, CD_EINVAL, "link %s: mass must be a positive finite number, got %g", nm, l->mass);
+    if (!(l->mass >= DBL_MIN) || !isfinite(l->mass)) {
+        seterr(err, CD_EINVAL,
+               l->mass > 0 && l->mass < DBL_MIN ? "link %s: mass must not be below 2.2e-308 (subnormal), got %g"
+                                                : "link %s: mass must be a positive finite number, got %g",
+               nm, l->mass);
         return -1;
     }
     if ((why = inertia_problem(l->inertia)) != NULL) {

@@ -119,7 +119,14 @@ cd_data *cd_data_create_ex(const cd_model *m, int event_capacity, const cd_alloc
     size = carve(m, &probe, NULL, maxdof);
     block = a.alloc(size, a.ctx);
     if (!block) {
-        cd_error_set(err, CD_ENOMEM, "out of memory creating data (%zu bytes)", size);
+        size_t stiff = cd_integ_stiff_size(m);
+        if (stiff > size / 2) /* what to change: the dense matrices grow with the square of the unknowns */
+            cd_error_set(err, CD_ENOMEM,
+                         "out of memory creating data (%zu bytes, of which %zu for the dense matrices of the implicit "
+                         "steppers over %d unknowns; an explicit integrator such as \"rk8pd\" needs %zu)",
+                         size, stiff, m->ny, size - stiff);
+        else
+            cd_error_set(err, CD_ENOMEM, "out of memory creating data (%zu bytes)", size);
         return NULL;
     }
     memset(block, 0, size);

@@ -5,6 +5,8 @@
 
 /* Bytes of the integrator's state and buffers (a region of the data's block). */
 size_t cd_integ_size(const cd_model *m);
+/* The part of it taken by the implicit steppers' dense matrices (0 for the explicit ones). */
+size_t cd_integ_stiff_size(const cd_model *m);
 /* Sets up the integrator of d in mem (cd_integ_size bytes, 16-aligned) and
  * allocates GSL's stepper objects; NULL with err. */
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err);

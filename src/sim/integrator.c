@@ -198,15 +198,19 @@ static int uses_rosw(cd_stepper s)
     return rosenbrock(s) || s == CD_STEP_AUTO || s == CD_STEP_RK4IMP || s == CD_STEP_MSBDF;
 }
 
+size_t cd_integ_stiff_size(const cd_model *m)
+{
+    return (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
+           (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
+           (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
+}
+
 size_t cd_integ_size(const cd_model *m)
 {
     size_t n = (size_t)(m->ny ? m->ny : 1), nin = (size_t)(m->nu + m->nv + 12 * m->nbody + m->nuser + m->nfinger);
     /* the struct, then 14 n + 12 nsw + nin doubles (14 buffers of n, 6 of 2 nsw), then the ros34pw2
      * buffers (also the Jacobian of rk4imp and msbdf), then rk4imp's or msbdf's own */
-    return sizeof(cd_integ) + 16 + (14 * n + nin + 12 * (size_t)m->nsw + 1) * sizeof(double) +
-           (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
-           (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
-           (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
+    return sizeof(cd_integ) + 16 + (14 * n + nin + 12 * (size_t)m->nsw + 1) * sizeof(double) + cd_integ_stiff_size(m);
 }
 
 void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
