@@ -1034,6 +1034,40 @@ Test(cli, bad_arguments_exit_2_runtime_errors_exit_1)
     rm_rf(dir);
 }
 
+Test(cli, check_refuses_a_scenario_whose_first_evaluation_overflows)
+{
+    /* A constant motor torque of 1e308 N m passes every range check, but
+     * the first evaluation of the dynamics overflows and a run stops at
+     * t = 0 ("numerical failure"). capdyn check evaluates the initial state
+     * and says so: exit 1, nothing on stdout, one line naming the file. A
+     * torque of 1 N m passes (the control of the test). */
+    static const char *arm = "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"arm\"\nbase = \"fixed\"\n\n"
+                             "[[system.link]]\nname = \"upper\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n"
+                             "actuator = { type = \"constant\", tau = %s }\n";
+    char dir[64], toml[256], text[512], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/arm.toml", dir);
+    snprintf(text, sizeof text, arm, "1e308");
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
+    cr_expect(out && out[0] == 0, "stdout '%s'", out);
+    cr_expect(err && strstr(err, "arm.toml: the initial state (t = 0 s) gives a non-finite value") &&
+                  strchr(err, '\n') == err + strlen(err) - 1,
+              "stderr '%s'", err);
+    free(out);
+    free(err);
+    out = err = NULL;
+    snprintf(text, sizeof text, arm, "1.0");
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 0, "exit %d: %s", rc, err);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}
+
 Test(cli, check_prints_the_model_summary)
 {
     /* capdyn check: exit 0 and an OK line whose counts are the model's

@@ -374,6 +374,17 @@ int cmd_check(int argc, char **argv)
         }
         warn_initial_overlap(o.scenario, m, d);
         warn_workspace(o.scenario, sc, d);
+        /* the first evaluation of a run: an input too large (or small) for
+         * double precision stops a run at t = 0, so check says so now */
+        if (cd_forward(m, d) != CD_OK) {
+            cli_error("%s: the initial state (t = %g s) gives a non-finite value or a singular mass matrix, so a run "
+                      "would stop at once; expected inputs a double can carry through the dynamics (look for huge "
+                      "positions, velocities, torques, gains or gravity, or tiny masses and inertias)",
+                      o.scenario, d->t);
+            cd_data_free(d);
+            cd_scenario_free(sc);
+            return CLI_FAIL;
+        }
         cd_data_free(d);
     }
     warn_fast_spin(o.scenario, sc);
