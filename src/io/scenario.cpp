@@ -39,8 +39,8 @@
 #include <cstring>
 #include <filesystem>
 #include <memory>
-#include <set>
 #include <new>
+#include <set>
 #include <string>
 #include <unordered_map>
 #include <utility>
@@ -1089,12 +1089,7 @@ void rotation_of(const Tab &t, double R[9], const char *extra_exclusive = nullpt
         if (ex) fail_at(ex->kloc, t.kp(extra_exclusive), std::string("give either quaternion or ") + extra_exclusive + ", not both");
         double q[4];
         vec_of(*qu->val, t.kp("quaternion"), 4, q, Range::Any, "an array of 4 numbers [w, x, y, z]");
-        /* normalised after scaling by its largest component: |q|^2 neither overflows nor underflows */
-        double mx = std::max(std::max(std::fabs(q[0]), std::fabs(q[1])), std::max(std::fabs(q[2]), std::fabs(q[3])));
-        if (!(mx > 0)) fail_at(qu->val->loc, t.kp("quaternion"), "expected a non-zero quaternion [w, x, y, z], got " + render(*qu->val));
-        for (double &c : q) c /= mx;
-        double nq = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-        for (double &c : q) c /= nq;
+        if (!cd_quat_normalize(q)) fail_at(qu->val->loc, t.kp("quaternion"), "expected a non-zero quaternion [w, x, y, z], got " + render(*qu->val));
         cd_quat_to_m3(R, q);
     }
 }
@@ -1229,11 +1224,13 @@ struct Builder {
         fail_at(l, path, err.msg, err.status == CD_ENOMEM ? CD_ENOMEM : CD_EINVAL);
     }
     /* a body's builder refused it: at the key its message is about (the
-     * inertia, the mass) when the table gives it, else at the table */
+     * inertia, the mass) when the table gives it, else at the table. The word
+     * is matched with its spaces: a name (letters, digits, '_', '-') that
+     * holds it, as in link 'inertia_wheel', is not taken for it */
     [[noreturn]] void body_fail(const Tab &t, const Loc &l, const std::string &path)
     {
         for (const char *k : {"inertia", "mass"})
-            if (std::strstr(err.msg, k))
+            if (std::strstr(err.msg, (std::string(" ") + k + " ").c_str()))
                 if (Entry *e = t.get(k)) builder_fail(e->val->loc, t.kp(k));
         builder_fail(l, path);
     }

@@ -752,12 +752,10 @@ extern "C" int cd_urdf_build(const cd_urdf *u, cd_model *m, const cd_urdf_opts *
     std::memcpy(sd.inertia, root.I, sizeof sd.inertia);
     double q[4], R[9], c[3];
     std::memcpy(q, o->quat, sizeof q);
-    double qn = std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3]);
-    if (!(qn > 0)) {
+    if (!cd_quat_normalize(q)) {
         cd_error_set(err, CD_EINVAL, "%s: base quaternion is zero", u->path.c_str());
         return -1;
     }
-    for (double &x : q) x /= qn;
     cd_quat_to_m3(R, q);
     cd_m3_mulv(c, R, root.com);
     for (int k = 0; k < 3; k++) sd.pos[k] = o->pos[k] + c[k];

@@ -9,6 +9,7 @@
 #ifndef CD_MATH_H
 #define CD_MATH_H
 
+#include <float.h>
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
@@ -124,6 +125,27 @@ static inline void cd_m3_from_rpy(double R[9], double roll, double pitch, double
 }
 
 /* ---- quaternions (w, x, y, z), active rotation body -> world ------------- */
+/* q / |q| in place, for a q given by a user (any scale). Where |q|^2
+ * overflows or underflows (components of 1e200 or 1e-200) it is formed after
+ * scaling q by its largest component; otherwise directly, so that a q of
+ * ordinary size gives the same bits as the plain division. Returns 0 and
+ * leaves q as it was for a zero or non-finite q. */
+static inline int cd_quat_normalize(double q[4])
+{
+    double n2 = q[0] * q[0] + q[1] * q[1] + q[2] * q[2] + q[3] * q[3], mx = 0, s[4];
+    int i;
+    if (!(isfinite(n2) && n2 >= DBL_MIN)) {
+        for (i = 0; i < 4; i++)
+            if (fabs(q[i]) > mx) mx = fabs(q[i]);
+        if (!(mx > 0) || !isfinite(mx)) return 0;
+        for (i = 0; i < 4; i++) s[i] = q[i] / mx;
+        n2 = s[0] * s[0] + s[1] * s[1] + s[2] * s[2] + s[3] * s[3];
+        for (i = 0; i < 4; i++) q[i] = s[i];
+    }
+    n2 = sqrt(n2);
+    for (i = 0; i < 4; i++) q[i] /= n2;
+    return 1;
+}
 static inline void cd_quat_to_m3(double R[9], const double qin[4])
 {
     double n = sqrt(qin[0] * qin[0] + qin[1] * qin[1] + qin[2] * qin[2] + qin[3] * qin[3]);

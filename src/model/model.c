@@ -273,6 +273,15 @@ static int is_rotation(const double R[9])
     return fabs(det - 1.0) < 1e-9;
 }
 
+/* A body's mass: positive, finite and not subnormal (a subnormal mass has
+ * lost its precision, and 1/m is inf). Returns NULL if valid, else a reason. */
+static const char *mass_problem(double mass)
+{
+    if (mass > 0 && mass < DBL_MIN) return "mass must not be below 2.2e-308 (subnormal)";
+    if (!(mass > 0) || !isfinite(mass)) return "mass must be a positive finite number";
+    return NULL;
+}
+
 /* Inertia about the CoM: symmetric, positive definite, and its principal
  * moments obey the triangle inequality (a real mass distribution). Returns
  * NULL if valid, else a reason. */
@@ -370,20 +379,17 @@ static int new_body(cd_model *m, const char *name, int sys, int parent, int jtyp
 
 int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
 {
-    int id, n, ok = 0, b, i;
+    int id, n, ok = 0, b;
     const char *why;
-    double z3[3] = {0, 0, 0}, R[9], ax[3] = {0, 0, 1}, qn, qm, qs[4];
+    double z3[3] = {0, 0, 0}, R[9], ax[3] = {0, 0, 1}, qs[4];
     FROZEN_CHECK(-1);
     if (!s) { seterr(err, CD_EINVAL, "system description is NULL"); return -1; }
     if (s->type != CD_BASE_FREE && s->type != CD_BASE_FIXED) {
         seterr(err, CD_EINVAL, "system '%s': base type must be free or fixed", s->name ? s->name : "");
         return -1;
     }
-    if (!(s->mass >= DBL_MIN) || !isfinite(s->mass)) { /* a subnormal mass has lost its precision (and 1/m is inf) */
-        seterr(err, CD_EINVAL,
-               s->mass > 0 && s->mass < DBL_MIN ? "system '%s': base mass must not be below 2.2e-308 (subnormal), got %g"
-                                                : "system '%s': base mass must be a positive finite number, got %g",
-               s->name ? s->name : "", s->mass);
+    if ((why = mass_problem(s->mass)) != NULL) {
+        seterr(err, CD_EINVAL, "system '%s': base %s, got %g", s->name ? s->name : "", why, s->mass);
         return -1;
     }
     if ((why = inertia_problem(s->inertia)) != NULL) {
@@ -394,17 +400,11 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
         seterr(err, CD_EINVAL, "system '%s': initial state has a non-finite value", s->name ? s->name : "");
         return -1;
     }
-    /* normalised after scaling by its largest component, so that |q|^2
-     * neither overflows (1e200) nor underflows */
-    qm = 0;
-    for (i = 0; i < 4; i++)
-        if (fabs(s->quat[i]) > qm) qm = fabs(s->quat[i]);
-    if (!(qm > 0)) {
+    memcpy(qs, s->quat, sizeof qs);
+    if (!cd_quat_normalize(qs)) {
         seterr(err, CD_EINVAL, "system '%s': base quaternion is zero", s->name ? s->name : "");
         return -1;
     }
-    for (i = 0; i < 4; i++) qs[i] = s->quat[i] / qm;
-    qn = sqrt(qs[0] * qs[0] + qs[1] * qs[1] + qs[2] * qs[2] + qs[3] * qs[3]);
     id = m->nsys;
     n = id + 1;
     ok |= RS(m->sys_name, n); ok |= RS(m->sys_base_type, n); ok |= RS(m->sys_body_adr, n);
@@ -418,10 +418,7 @@ int cd_model_add_system(cd_model *m, const cd_system_desc *s, cd_error *err)
     m->sys_body_adr[id] = m->nbody;
     m->sys_nbody[id] = 1;
     cd_v3_copy(m->sys_pos0 + 3 * id, s->pos);
-    m->sys_quat0[4 * id] = qs[0] / qn;
-    m->sys_quat0[4 * id + 1] = qs[1] / qn;
-    m->sys_quat0[4 * id + 2] = qs[2] / qn;
-    m->sys_quat0[4 * id + 3] = qs[3] / qn;
+    memcpy(m->sys_quat0 + 4 * id, qs, sizeof qs);
     cd_v3_copy(m->sys_vel0 + 3 * id, s->vel);
     cd_v3_copy(m->sys_angvel0 + 3 * id, s->angvel);
     m->nsys++;
@@ -459,11 +456,8 @@ int cd_model_add_link(cd_model *m, int sys, const cd_link_desc *l, cd_error *err
         seterr(err, CD_EINVAL, "link %s: joint type must be revolute or prismatic", nm);
         return -1;
     }
-    if (!(l->mass >= DBL_MIN) || !isfinite(l->mass)) {
-        seterr(err, CD_EINVAL,
-               l->mass > 0 && l->mass < DBL_MIN ? "link %s: mass must not be below 2.2e-308 (subnormal), got %g"
-                                                : "link %s: mass must be a positive finite number, got %g",
-               nm, l->mass);
+    if ((why = mass_problem(l->mass)) != NULL) {
+        seterr(err, CD_EINVAL, "link %s: %s, got %g", nm, why, l->mass);
         return -1;
     }
     if ((why = inertia_problem(l->inertia)) != NULL) {
