@@ -410,6 +410,45 @@ Test(loader_limits, run_stops_when_its_evaluation_budget_is_spent, .timeout = 60
     lu_rm_rf(dir);
 }
 
+Test(loader_limits, a_run_whose_steps_collapse_stops_at_its_pace_not_after_its_budget, .timeout = 120)
+{
+    /* tumbling_target with a gravity of 1e19 m/s^2: every value passes the
+     * loader, but the satellite's speed grows by 1e19 m/s every second and
+     * the steps fall to ~1e-10 s, some 1e11 steps for the 20 s. With
+     * max_wall_time = 20 s the pace check looks after 0.2 s (a hundredth of
+     * the budget) and stops the run there, as the projection (some 1e5 s)
+     * is far above 10 x 20 s, instead of after the 20 s the budget allows:
+     * exit status 1, one error line naming the pace and the budget, the
+     * samples so far kept */
+    char dir[64], scen[1024], *out = NULL, *err = NULL;
+    int rc;
+    lu_tmpdir(dir, sizeof dir);
+    snprintf(scen, sizeof scen, "%s/scenarios/tumbling_target.toml", lu_root());
+    {
+        const char *a[] = {"run", scen, "--set", "simulation.gravity=[0,0,1e19]", "--set",
+                           "simulation.max_wall_time=20", "-o", "crawl.h5", "-q", NULL};
+        rc = lu_capdyn(dir, &out, &err, a);
+    }
+    cr_expect_eq(rc, 1, "%s", err);
+    cr_expect(err && strstr(err, "capdyn: error: run failed (interrupted): work budget: at its pace so far (t = ") == err &&
+                  strstr(err, " more than 10 x simulation.max_wall_time = 20 s; stopped early (0 lifts the budget); "
+                              "results up to t = ") &&
+                  strstr(err, " kept in 'crawl.h5'\n") && strchr(err, '\n') == err + strlen(err) - 1,
+              "%s", err);
+    free(out);
+    free(err);
+    {
+        /* the file holds the committed samples (t = 0 at least) */
+        const char *a[] = {"info", "crawl.h5", NULL};
+        rc = lu_capdyn(dir, &out, &err, a);
+        cr_expect_eq(rc, 0, "%s", err);
+        cr_expect(out && strstr(out, "status      interrupted: work budget: at its pace so far"), "%s", out);
+        free(out);
+        free(err);
+    }
+    lu_rm_rf(dir);
+}
+
 Test(loader_limits, a_file_included_again_and_again_is_bounded)
 {
     /* b.toml holds 20 000 check points (100 000 values); main includes it

@@ -37,7 +37,8 @@ typedef struct {
     /* work budget (simulation.max_wall_time, max_rhs_evals; 0 = no limit):
      * the step callback stops the run and writes why in budget_msg */
     double max_wall, max_rhs;
-    char budget_msg[256];
+    double t_start;        /* simulated time at the loop's start (the pace check) */
+    char budget_msg[320];
     int until_verdict;     /* end the run at the monitor's verdict (capdyn sweep --until-verdict) */
     const cd_ctrl *ctl;    /* the scenario's built-in controller ([control]), or NULL */
     cd_ctrl_merit *merit;  /* its figures of merit, updated at every sample (with ctl) */

@@ -157,6 +157,36 @@ double *cli_nan_array(int n)
     return v;
 }
 
+/* The pace check of the wall-time budget (docs/scenario-format.md "Work
+ * budget"): a run whose pace so far would need more than CLI_PACE_FACTOR
+ * times simulation.max_wall_time to reach its duration is stopped once it has
+ * run CLI_PACE_WAIT seconds (or a hundredth of the budget, when less), not
+ * when the budget is spent: inputs that pass every check but make the steps
+ * collapse (a gravity of 1e19 m/s^2, a gain of 1e9) would otherwise take an
+ * hour to say so. A legitimate slow start (a contact burst) is far inside the
+ * factor: the slowest shipped scenario runs at about real time. */
+#define CLI_PACE_WAIT 10.0
+#define CLI_PACE_FACTOR 10.0
+static int off_pace(run_ctx *c, const cd_data *d, double now)
+{
+    double el = now - c->wall0, span = c->t_end - c->t_start, done = d->t - c->t_start, wait;
+    if (!(span > 0)) return 0;
+    wait = 0.01 * c->max_wall < CLI_PACE_WAIT ? 0.01 * c->max_wall : CLI_PACE_WAIT;
+    if (el < wait || !(el * span > CLI_PACE_FACTOR * c->max_wall * done)) return 0;
+    if (done > 0)
+        snprintf(c->budget_msg, sizeof c->budget_msg,
+                 "work budget: at its pace so far (t = %.3g s of %g s after %.3g s of wall-clock time, the last step "
+                 "%.3g s long) the run would need about %.3g s, more than %g x simulation.max_wall_time = %g s; "
+                 "stopped early (0 lifts the budget)",
+                 d->t, c->t_end, el, d->stats.h_last, el * span / done, CLI_PACE_FACTOR, c->max_wall);
+    else
+        snprintf(c->budget_msg, sizeof c->budget_msg,
+                 "work budget: no progress past t = %.9g s after %.3g s of wall-clock time, so the run cannot end "
+                 "within %g x simulation.max_wall_time = %g s; stopped early (0 lifts the budget)",
+                 d->t, el, CLI_PACE_FACTOR, c->max_wall);
+    return 1;
+}
+
 static int step_cb(const cd_model *m, cd_data *d, void *user)
 {
     run_ctx *c = (run_ctx *)user;
@@ -177,6 +207,7 @@ static int step_cb(const cd_model *m, cd_data *d, void *user)
                      now - c->wall0, c->max_wall, d->t);
             return 1;
         }
+        if (off_pace(c, d, now)) return 1;
     }
     for (k = 0; k < m->nslot; k++) {
         const double *ft = d->slot_ft + 3 * k;
@@ -525,6 +556,7 @@ cd_status cli_run_loop(const cd_scenario *sc, cd_data *d, cd_h5_writer *w, cd_mo
     double ratio = sc->duration / sc->output_dt;
     sample_out o;
     /* the state at t = 0 counts for the maxima too (contacts closed at start) */
+    c->t_start = d->t;
     (void)step_cb(m, d, c);
     if (c->ctl && c->merit) cd_ctrl_merit_init(c->merit, c->ctl, m, d); /* docs/capture.md */
 
