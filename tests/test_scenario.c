@@ -815,6 +815,24 @@ Test(scenario_override, vector_components_and_the_only_element)
                    SUBS("--set 'system.position.w=1': key 'system[0].position': no component 'w' (expected x, y, z"));
 }
 
+Test(scenario_override, a_component_of_a_key_the_file_lacks_is_named_as_such)
+{
+    /* minimal.toml has no gravity and no velocity: .x on them cannot pick a
+     * component of anything; the message says so and names the whole
+     * array to set (it said "got a table": the override's own {x = 1}) */
+    const char *grav[] = {"simulation.gravity.x=1"};
+    const char *vel[] = {"system.ball.velocity.y=2"};
+    const char *scalar[] = {"simulation.duration.z=1"};
+    expect_fail_ov("minimal.toml", grav, 1, CD_EINVAL,
+                   SUBS("--set 'simulation.gravity.x=1': key 'simulation.gravity': expected an array of 3 numbers, got "
+                        "only the component '.x' (--set named a component of a key the file does not have: set the "
+                        "whole array instead, --set 'simulation.gravity=[x, y, z]')"));
+    expect_fail_ov("minimal.toml", vel, 1, CD_EINVAL,
+                   SUBS("key 'system[0].velocity': expected an array of 3 numbers, got only the component '.y' "));
+    expect_fail_ov("minimal.toml", scalar, 1, CD_EINVAL,
+                   SUBS("key 'simulation.duration': no component 'z': the value is 4, not an array of numbers"));
+}
+
 Test(scenario_override, later_override_wins)
 {
     const char *ov[] = {"simulation.duration=5", "simulation.duration=7"};

@@ -83,6 +83,8 @@ struct Node {
     double fval = 0;
     bool bval = false;
     std::string sval;        /* NK::String; NK::Other: the literal */
+    std::string component;   /* a table made by --set 'KEY.x=V' for a KEY the file lacks: "x" */
+    std::string component_of;/* and that KEY's path */
     Entry *find(const std::string &k)
     {
         for (auto &e : tab)
@@ -124,7 +126,11 @@ std::string render(const Node &n)
     case NK::Bool: return n.bval ? "true" : "false";
     case NK::String: return "'" + n.sval + "'";
     case NK::Other: return "a date/time value";
-    case NK::Table: return "a table";
+    case NK::Table:
+        if (!n.component.empty())
+            return "only the component '." + n.component + "' (--set named a component of a key the file does not "
+                   "have: set the whole array instead, --set '" + n.component_of + "=[x, y, z]')";
+        return "a table";
     case NK::Array: {
         std::string s = "[";
         for (size_t i = 0; i < n.arr.size(); i++) {
@@ -780,6 +786,15 @@ void apply_override(NodeP &root, const std::string &ov)
                     ne.val = std::make_shared<Node>();
                     ne.val->kind = NK::Table;
                     ne.val->loc = L;
+                    /* KEY.x = V on a missing KEY: a table {x = V}, which the
+                     * schema refuses where an array is expected; render()
+                     * says why (no table of the schema has a key x, y or z) */
+                    const OvSeg &nx = segs[k + 1];
+                    if (k + 2 == segs.size() && nx.ix.empty() && (nx.id == "x" || nx.id == "y" || nx.id == "z"))
+                    {
+                        ne.val->component = nx.id;
+                        ne.val->component_of = join(shown, s.id);
+                    }
                 }
                 cur.tab.push_back(ne);
                 slot = &cur.tab.back().val;
@@ -828,6 +843,8 @@ void apply_override(NodeP &root, const std::string &ov)
             }
             slot = hit;
             shown = idx(shown, hit_i);
+        } else if (s.id == "x" || s.id == "y" || s.id == "z") {
+            fail_at(L, shown, "no component '" + s.id + "': the value is " + render(cur) + ", not an array of numbers");
         } else {
             fail_at(L, shown, "expected a table to select '" + s.id + "' in, got " + render(cur));
         }
