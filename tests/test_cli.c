@@ -1068,6 +1068,40 @@ Test(cli, check_refuses_a_scenario_whose_first_evaluation_overflows)
     rm_rf(dir);
 }
 
+Test(cli, check_refuses_a_scenario_whose_first_sample_overflows)
+{
+    /* A free body at 1e300 m/s: the evaluation is finite (no force depends
+     * on the speed), but the kinetic energy m v^2 / 2 = 5e599 J overflows, and
+     * a run stops at its first sample ("non-finite output"). capdyn check
+     * computes the first sample's energy and momenta and names the system
+     * and the quantity: exit 1, one line. 1e100 m/s (5e199 J) passes. */
+    static const char *ball = "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"ball\"\nmass = 1.0\n"
+                              "inertia = [0.01, 0.01, 0.01]\nvelocity = [%s, 0, 0]\n";
+    char dir[64], toml[256], text[512], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
+    snprintf(text, sizeof text, ball, "1e300");
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
+    cr_expect(out && out[0] == 0, "stdout '%s'", out);
+    cr_expect(err && strstr(err, "ball.toml: system 'ball' at the initial state (t = 0 s) has a non-finite kinetic "
+                                 "energy, so a run would stop at its first sample") &&
+                  strchr(err, '\n') == err + strlen(err) - 1,
+              "stderr '%s'", err);
+    free(out);
+    free(err);
+    out = err = NULL;
+    snprintf(text, sizeof text, ball, "1e100");
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 0, "exit %d: %s", rc, err);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}
+
 Test(cli, check_prints_the_model_summary)
 {
     /* capdyn check: exit 0 and an OK line whose counts are the model's

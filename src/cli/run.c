@@ -416,6 +416,25 @@ int cmd_check(int argc, char **argv)
             cd_scenario_free(sc);
             return CLI_FAIL;
         }
+        /* the first sample's energy and momenta: a velocity of 1e300 m/s
+         * passes the evaluation, but its kinetic energy is inf and a run
+         * stops at its first sample */
+        for (s = 0; s < m->nsys; s++) {
+            double ke, P[3], Lc[3], Lo[3], c[3], pe = cd_potential_energy(m, d, s);
+            cd_momentum(m, d, s, &ke, P, Lc, Lo, c);
+            if (!isfinite(ke + pe + P[0] + P[1] + P[2] + Lc[0] + Lc[1] + Lc[2] + Lo[0] + Lo[1] + Lo[2] + c[0] + c[1] +
+                          c[2])) {
+                cli_error("%s: system '%s' at the initial state (t = %g s) has a non-finite %s, so a run would stop at "
+                          "its first sample; expected velocities, angular velocities, positions and masses whose "
+                          "energy and momenta a double can hold",
+                          o.scenario, m->sys_name[s], d->t,
+                          !isfinite(ke) ? "kinetic energy" : !isfinite(pe) ? "potential energy"
+                          : !isfinite(P[0] + P[1] + P[2]) ? "linear momentum" : "angular momentum or centre of mass");
+                cd_data_free(d);
+                cd_scenario_free(sc);
+                return CLI_FAIL;
+            }
+        }
         cd_data_free(d);
     }
     warn_fast_spin(o.scenario, sc);
