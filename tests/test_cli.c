@@ -1034,6 +1034,34 @@ Test(cli, bad_arguments_exit_2_runtime_errors_exit_1)
     rm_rf(dir);
 }
 
+/* capdyn check on NAME.toml made from the template fmt with the value bad:
+ * exit 1, nothing on stdout, one line on stderr holding want; with the value
+ * good: exit 0 (the control). */
+static void check_refuses_then_accepts(const char *name, const char *fmt, const char *bad, const char *good,
+                                       const char *want)
+{
+    char dir[64], toml[256], text[512], *out = NULL, *err = NULL;
+    int rc;
+    make_tmpdir(dir, sizeof dir);
+    snprintf(toml, sizeof toml, "%s/%s", dir, name);
+    snprintf(text, sizeof text, fmt, bad);
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
+    cr_expect(out && out[0] == 0, "stdout '%s'", out);
+    cr_expect(err && strstr(err, want) && strchr(err, '\n') == err + strlen(err) - 1, "stderr '%s'", err);
+    free(out);
+    free(err);
+    out = err = NULL;
+    snprintf(text, sizeof text, fmt, good);
+    write_file(toml, text);
+    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
+    cr_expect_eq(rc, 0, "exit %d: %s", rc, err);
+    free(out);
+    free(err);
+    rm_rf(dir);
+}
+
 Test(cli, check_refuses_a_scenario_whose_first_evaluation_overflows)
 {
     /* A constant motor torque of 1e308 N m passes every range check, but
@@ -1041,31 +1069,11 @@ Test(cli, check_refuses_a_scenario_whose_first_evaluation_overflows)
      * t = 0 ("numerical failure"). capdyn check evaluates the initial state
      * and says so: exit 1, nothing on stdout, one line naming the file. A
      * torque of 1 N m passes (the control of the test). */
-    static const char *arm = "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"arm\"\nbase = \"fixed\"\n\n"
-                             "[[system.link]]\nname = \"upper\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n"
-                             "actuator = { type = \"constant\", tau = %s }\n";
-    char dir[64], toml[256], text[512], *out = NULL, *err = NULL;
-    int rc;
-    make_tmpdir(dir, sizeof dir);
-    snprintf(toml, sizeof toml, "%s/arm.toml", dir);
-    snprintf(text, sizeof text, arm, "1e308");
-    write_file(toml, text);
-    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
-    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
-    cr_expect(out && out[0] == 0, "stdout '%s'", out);
-    cr_expect(err && strstr(err, "arm.toml: the initial state (t = 0 s) gives a non-finite value") &&
-                  strchr(err, '\n') == err + strlen(err) - 1,
-              "stderr '%s'", err);
-    free(out);
-    free(err);
-    out = err = NULL;
-    snprintf(text, sizeof text, arm, "1.0");
-    write_file(toml, text);
-    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
-    cr_expect_eq(rc, 0, "exit %d: %s", rc, err);
-    free(out);
-    free(err);
-    rm_rf(dir);
+    check_refuses_then_accepts("arm.toml",
+                               "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"arm\"\nbase = \"fixed\"\n\n"
+                               "[[system.link]]\nname = \"upper\"\nmass = 1.0\ninertia = [0.01, 0.01, 0.01]\n"
+                               "actuator = { type = \"constant\", tau = %s }\n",
+                               "1e308", "1.0", "arm.toml: the initial state (t = 0 s) gives a non-finite value");
 }
 
 Test(cli, check_refuses_a_scenario_whose_first_sample_overflows)
@@ -1075,31 +1083,12 @@ Test(cli, check_refuses_a_scenario_whose_first_sample_overflows)
      * a run stops at its first sample ("non-finite output"). capdyn check
      * computes the first sample's energy and momenta and names the system
      * and the quantity: exit 1, one line. 1e100 m/s (5e199 J) passes. */
-    static const char *ball = "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"ball\"\nmass = 1.0\n"
-                              "inertia = [0.01, 0.01, 0.01]\nvelocity = [%s, 0, 0]\n";
-    char dir[64], toml[256], text[512], *out = NULL, *err = NULL;
-    int rc;
-    make_tmpdir(dir, sizeof dir);
-    snprintf(toml, sizeof toml, "%s/ball.toml", dir);
-    snprintf(text, sizeof text, ball, "1e300");
-    write_file(toml, text);
-    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
-    cr_expect_eq(rc, 1, "exit %d: %s", rc, err);
-    cr_expect(out && out[0] == 0, "stdout '%s'", out);
-    cr_expect(err && strstr(err, "ball.toml: system 'ball' at the initial state (t = 0 s) has a non-finite kinetic "
-                                 "energy, so a run would stop at its first sample") &&
-                  strchr(err, '\n') == err + strlen(err) - 1,
-              "stderr '%s'", err);
-    free(out);
-    free(err);
-    out = err = NULL;
-    snprintf(text, sizeof text, ball, "1e100");
-    write_file(toml, text);
-    rc = capdyn(dir, &out, &err, "check", toml, (char *)NULL);
-    cr_expect_eq(rc, 0, "exit %d: %s", rc, err);
-    free(out);
-    free(err);
-    rm_rf(dir);
+    check_refuses_then_accepts("ball.toml",
+                               "[simulation]\nduration = 0.01\n\n[[system]]\nname = \"ball\"\nmass = 1.0\n"
+                               "inertia = [0.01, 0.01, 0.01]\nvelocity = [%s, 0, 0]\n",
+                               "1e300", "1e100",
+                               "ball.toml: system 'ball' at the initial state (t = 0 s) has a non-finite kinetic "
+                               "energy, so a run would stop at its first sample");
 }
 
 Test(cli, check_prints_the_model_summary)
