@@ -265,14 +265,30 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
     double best;
     x[0] = t1;
     for (j = 0; j < m; j++) x[j + 1] = g->th[j];
+    double dx[CD_BDF_NHIST + 1][CD_BDF_NHIST + 1];
     for (q = 0; q <= CD_BDF_KMAX + 1; q++) E[q] = -1;
+    /* every order the loop below looks at gets at least the 0 of an unknown
+     * whose points are all equal (skipped there: its divided differences are
+     * exactly 0); most of a contact model's unknowns are such, the bristles
+     * of the open slots */
+    for (q = (k > 1 ? k - 1 : 1); q <= k + 1 && q <= CD_BDF_KMAX; q++)
+        if (q + 1 <= m) E[q] = 0;
+    /* the differences' denominators, x_i - x_{i-j}, once for every unknown */
+    for (j = 1; j <= m; j++)
+        for (i = m; i >= j; i--) dx[i][j] = x[i] - x[i - j];
     for (c = 0; c < g->ny; c++) {
-        double v[CD_BDF_NHIST + 1], sc = scale(g, y1[c]);
+        double v[CD_BDF_NHIST + 1], sc;
+        int moved = 0;
         v[0] = y1[c];
-        for (j = 0; j < m; j++) v[j + 1] = g->Y[j][c];
+        for (j = 0; j < m; j++) {
+            v[j + 1] = g->Y[j][c];
+            moved |= v[j + 1] != v[0];
+        }
+        if (!moved) continue;
+        sc = scale(g, y1[c]);
         /* Newton's divided differences in place: v[i] = y[x_0..x_i] */
         for (j = 1; j <= m; j++)
-            for (i = m; i >= j; i--) v[i] = (v[i] - v[i - 1]) / (x[i] - x[i - j]);
+            for (i = m; i >= j; i--) v[i] = (v[i] - v[i - 1]) / dx[i][j];
         for (q = (k > 1 ? k - 1 : 1); q <= k + 1 && q <= CD_BDF_KMAX; q++) {
             double cq = 1, hq = 0, e;
             if (q + 1 > m) continue; /* needs q + 2 points */
