@@ -142,7 +142,7 @@ static int spin_cost(cd_stepper st, double *c, double *k)
     case CD_STEP_RKCK: *c = 15; *k = 5; return 1;
     case CD_STEP_RKF45: *c = 22; *k = 5; return 1;
     case CD_STEP_RK4IMP: *c = 14.5; *k = 5; return 1; /* capdyn's Gauss stepper (2026-11-27) */
-    case CD_STEP_MSBDF: *c = 119; *k = 6; return 1;   /* capdyn's BDF (2026-11-27) */
+    case CD_STEP_MSBDF: *c = 29; *k = 6; return 1;    /* capdyn's BDF, its step clipped to its growth limit (2026-11-28) */
     case CD_STEP_ROS34PW2: *c = 635; *k = 3; return 1;
     default: return 0; /* fixed steps */
     }

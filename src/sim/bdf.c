@@ -327,6 +327,32 @@ static void *bdf_alloc(size_t dim)
 
 static int near(double a, double b, double h) { return fabs(a - b) <= 1e-6 * fabs(h); }
 
+double cd_bdf_step_limit(const cd_bdf *g, double t, double h)
+{
+    double hp = g->t1p - g->t0p, last;
+    int k, nh;
+    if (g->have_pend && near(t, g->t1p, hp)) { /* the pending step accepted: pushed, then the order it chose */
+        last = t - g->t0p;
+        nh = g->nh < CD_BDF_NHIST ? g->nh + 1 : CD_BDF_NHIST;
+        k = g->k_next;
+    } else if (g->have_pend && near(t, g->t0p, hp)) { /* rejected by the error test */
+        if (g->nh < 2) return h;
+        last = g->th[0] - g->th[1];
+        nh = g->nh;
+        k = g->nrej + 1 >= 3 ? 1 : g->k;
+    } else if (g->nh >= 2 && near(t, g->th[0], h)) { /* the same start again (a refused or failed step) */
+        last = g->th[0] - g->th[1];
+        nh = g->nh;
+        k = g->k;
+    } else {
+        return h; /* a restart: order 1 */
+    }
+    if (g->kfix > 0) k = g->kfix;
+    if (k > nh - 1) k = nh - 1 > 1 ? nh - 1 : 1;
+    if (k <= 1 || last < CD_BDF_SLIVER * h) return h; /* no bound at order 1; after a sliver the history restarts */
+    return h > CD_BDF_RATIO_MAX * last ? CD_BDF_RATIO_MAX * last : h;
+}
+
 static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], double yerr[], const double dydt_in[],
                      double dydt_out[], const gsl_odeiv2_system *sys)
 {

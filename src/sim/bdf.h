@@ -42,6 +42,14 @@ void cd_bdf_init_plain(cd_bdf *g, cd_rosw *rw, int ny, double rtol, double atol,
  * startup from known values). */
 void cd_bdf_seed(cd_bdf *g, double t, const double *y);
 
+/* The step the next apply at t would take instead of h: h, or the longest
+ * step its growth rule (CD_BDF_RATIO_MAX) lets it take, with the history
+ * as that apply will see it (the pending step accepted when t is its end).
+ * The driver clips its proposal with it: a step refused for its growth is
+ * halved by GSL's evolve, to below the last step when the proposal was under
+ * 2x it, where the clipped one grows by the full 1.5x. */
+double cd_bdf_step_limit(const cd_bdf *g, double t, double h);
+
 /* The GSL stepper type (name "msbdf"; order() the order of the last step);
  * each step object must be bound to a workspace before its first step. */
 extern const gsl_odeiv2_step_type *cd_step_bdf;

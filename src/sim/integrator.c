@@ -1218,6 +1218,9 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             double t = t0, hmax = d->opt.h_max;
             long before = (long)I->drv->e->failed_steps;
             if (hmax > 0 && I->h > hmax) I->h = hmax;
+            /* msbdf refuses a step that grows by more than 1.5x (zero-stability), and evolve
+             * then halves it: propose the step it accepts (bdf.h) */
+            if (I->stepper == CD_STEP_MSBDF) I->h = cd_bdf_step_limit(&I->bdf, t0, I->h);
             /* a step that would end within round-off of t1 would leave a sliver
              * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
             if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
