@@ -76,7 +76,7 @@ typedef struct {
 /* Integrator and event statistics, cumulative since cd_data_reset(). */
 typedef struct {
     long nrhs;            /* right-hand-side evaluations */
-    long nswitch_stiff;   /* integrator "auto": switches to the stiff stepper (ros34pw2) */
+    long nswitch_stiff;   /* integrator "auto": switches to the stiff stepper (msbdf) */
     long nswitch_explicit;/* ... and back to the explicit one (rk8pd) */
     double t_stiff;       /* ... simulated time spent on the stiff stepper [s] */
     double t_switch_last; /* ... time of the last switch [s] (-1: none) */

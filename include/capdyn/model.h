@@ -95,7 +95,7 @@ typedef enum {
     CD_STEP_RKF45 = 0, CD_STEP_RKCK, CD_STEP_RK8PD, CD_STEP_RK4IMP, CD_STEP_MSBDF,
     CD_STEP_RK4_FIXED,     /* classic RK4 with fixed step h_fixed (embedding mode) */
     CD_STEP_ROS34PW2,      /* linearly implicit Rosenbrock-W, order 3(2), L-stable: stiff contact (src/sim/rosw.c) */
-    CD_STEP_AUTO,          /* rk8pd while the problem is not stiff, ros34pw2 while it is: the switch is decided by
+    CD_STEP_AUTO,          /* rk8pd while the problem is not stiff, msbdf while it is: the switch is decided by
                               the spectral radius of the structured Jacobian against the step (src/sim/integrator.c) */
     CD_STEP_RODAS4,        /* linearly implicit Rosenbrock RODAS4, order 4(3), L-stable, exact (finite-difference) Jacobian renewed every step (src/sim/rosw.c) */
     CD_STEP_NTYPES

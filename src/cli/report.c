@@ -446,7 +446,7 @@ static void integrator_final(const cd_h5r *r, const char *stepper, const char *r
     if (stepper && strcmp(stepper, "auto") == 0 && nws >= 0 && nwe >= 0) {
         used = strlen(line);
         snprintf(line + used, len - used,
-                 "; auto: %lld switches to ros34pw2 and %lld back to rk8pd, ros34pw2 for %.3g of %.3g s", nws, nwe,
+                 "; auto: %lld switches to msbdf and %lld back to rk8pd, msbdf for %.3g of %.3g s", nws, nwe,
                  tstiff > 0 ? tstiff : 0.0, tfin);
     }
 }

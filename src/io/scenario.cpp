@@ -2517,7 +2517,8 @@ struct Builder {
         switch (o.stepper) {
         case CD_STEP_RKF45: case CD_STEP_RKCK: per_step = 5; break;
         case CD_STEP_RK8PD: per_step = 12; break;
-        case CD_STEP_ROS34PW2: case CD_STEP_AUTO: per_step = 4; break; /* auto: at least the stiff stepper's */
+        case CD_STEP_ROS34PW2: per_step = 4; break;
+        case CD_STEP_AUTO: per_step = 2; break; /* at least the stiff stepper's: msbdf, a Newton iteration and f(t1) */
         case CD_STEP_RODAS4: per_step = 6; break;
         case CD_STEP_RK4_FIXED: per_step = 4; hname = "h_fixed"; h = o.h_fixed; break;
         default: break;

@@ -50,6 +50,12 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+
+/* auto's stiff stepper: msbdf (1, since 2026-11-28: docs/dynamics.md, "auto"), or
+ * ros34pw2 as before (build with -DCD_AUTO_BDF=0: for comparisons) */
+#ifndef CD_AUTO_BDF
+#define CD_AUTO_BDF 1
+#endif
 #include <string.h>
 
 /* auto (CD_STEP_AUTO): a stiffness check runs every auto_every accepted
@@ -202,7 +208,7 @@ size_t cd_integ_stiff_size(const cd_model *m)
 {
     return (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
            (m->opt.stepper == CD_STEP_RK4IMP ? cd_gauss4_size(m) : 0) +
-           (m->opt.stepper == CD_STEP_MSBDF ? cd_bdf_size(m) : 0);
+           (m->opt.stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && m->opt.stepper == CD_STEP_AUTO) ? cd_bdf_size(m) : 0);
 }
 
 size_t cd_integ_size(const cd_model *m)
@@ -276,7 +282,15 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_bdf_bind(I->drv->s, &I->bdf);
         }
-        if (I->autom) {
+        if (I->autom && CD_AUTO_BDF) {
+            /* auto's stiff stepper: msbdf, located as msbdf is (rk8pd sub-steps) */
+            I->s_stiff = gsl_odeiv2_step_alloc(cd_step_bdf, n);
+            I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
+            if (!I->s_stiff || !I->loc_stiff) goto nomem;
+            cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
+            cd_bdf_bind(I->s_stiff, &I->bdf);
+            cd_rosw_bind(I->loc_stiff, &I->rw, 1);
+        } else if (I->autom) {
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
             I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
             if (!I->s_stiff || !I->loc_stiff) goto nomem;
@@ -515,10 +529,10 @@ static int rk4_step(cd_integ *I, double t, double h, double *y, int use_fsal)
  * fixed-step mode) of length h from (t, y), y updated in place. */
 static int one_step(cd_integ *I, double t, double h, double *y)
 {
-    gsl_odeiv2_step *loc = I->stiff ? I->loc_stiff : I->loc;
+    gsl_odeiv2_step *loc = I->stiff && !CD_AUTO_BDF ? I->loc_stiff : I->loc;
     if (I->fixed) return rk4_step(I, t, h, y, 0);
     /* a Rosenbrock locator starts afresh; rk8pd keeps nothing between steps */
-    if (I->stiff || rosenbrock(I->stepper)) gsl_odeiv2_step_reset(loc);
+    if ((I->stiff && !CD_AUTO_BDF) || rosenbrock(I->stepper)) gsl_odeiv2_step_reset(loc);
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
@@ -579,7 +593,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 static long trial_cost(const cd_integ *I)
 {
     if (I->loc_nsub > 0) return 14 * (long)I->loc_nsub;
-    return I->fixed ? 5 : I->stiff || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
+    return I->fixed ? 5 : (I->stiff && !CD_AUTO_BDF) || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
 }
 
 static int budget_left(const cd_data *d, const cd_integ *I, long need)
@@ -726,7 +740,7 @@ static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0,
  * step. */
 static int implicit_with_explicit_locator(const cd_integ *I)
 {
-    return I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF; /* (never auto: I->stiff is auto's) */
+    return I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && I->autom && I->stiff);
 }
 
 /* One locator step to t0 + tau, and the bracket end it certifies: the new
@@ -1220,7 +1234,8 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             if (hmax > 0 && I->h > hmax) I->h = hmax;
             /* msbdf refuses a step that grows by more than 1.5x (zero-stability), and evolve
              * then halves it: propose the step it accepts (bdf.h) */
-            if (I->stepper == CD_STEP_MSBDF) I->h = cd_bdf_step_limit(&I->bdf, t0, I->h);
+            if (I->stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && I->autom && I->stiff))
+                I->h = cd_bdf_step_limit(&I->bdf, t0, I->h);
             /* a step that would end within round-off of t1 would leave a sliver
              * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
             if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
