@@ -8,7 +8,7 @@ BENCH_HOLD ?= 10
 BENCH_RESULT = bench/results/$(shell date -u +%Y-%m-%d).txt
 BENCH_RESULT_AS_WRITTEN = bench/results/$(shell date -u +%Y-%m-%d)-rk8pd.txt
 # capdyn's scenes run on the default stepper auto (docs/dynamics.md: rk8pd
-# while not stiff, ros34pw2 while stiff) with the step left to its error
+# while not stiff, msbdf while stiff) with the step left to its error
 # control; a second pass runs them as written (rk8pd)
 BENCH_STIFF ?= simulation.integrator="auto";simulation.h_max=0.05
 
@@ -61,7 +61,7 @@ bench: bench-deps
 	CAPDYN_BENCH_SET='$(BENCH_STIFF)' $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) -o $(BENCH_RESULT)
 	CAPDYN_BENCH_SET= $(BENCH_SPEED) -r $(BENCH_REPS) --hold $(BENCH_HOLD) --scenes-only -o $(BENCH_RESULT_AS_WRITTEN)
 	@echo "results: $(BENCH_DAY)-scenarios.txt (every scenario), $(BENCH_DAY)-broadphase.txt (broad phase on/off),"
-	@echo "         $(BENCH_DAY)-ticks.txt (control-loop ticks), $(BENCH_RESULT) (vs MuJoCo, capdyn with ros34pw2),"
+	@echo "         $(BENCH_DAY)-ticks.txt (control-loop ticks), $(BENCH_RESULT) (vs MuJoCo, capdyn with auto),"
 	@echo "         $(BENCH_RESULT_AS_WRITTEN) (vs MuJoCo, the scenarios' own rk8pd)"
 
 .PHONY: bench-deps
