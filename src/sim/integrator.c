@@ -50,13 +50,13 @@
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 /* auto's stiff stepper: msbdf (1, since 2026-11-28: docs/dynamics.md, "auto"), or
  * ros34pw2 as before (build with -DCD_AUTO_BDF=0: for comparisons) */
 #ifndef CD_AUTO_BDF
 #define CD_AUTO_BDF 1
 #endif
-#include <string.h>
 
 /* auto (CD_STEP_AUTO): a stiffness check runs every auto_every accepted
  * steps (CD_AUTO_EVERY, doubled up to CD_AUTO_EVERY_MAX after a switch that
@@ -204,6 +204,19 @@ static int uses_rosw(cd_stepper s)
     return rosenbrock(s) || s == CD_STEP_AUTO || s == CD_STEP_RK4IMP || s == CD_STEP_MSBDF;
 }
 
+/* the step in progress is msbdf's: msbdf's own, or auto's while stiff */
+static int on_bdf(const cd_integ *I)
+{
+    return I->stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && I->autom && I->stiff);
+}
+
+/* the locator takes one Rosenbrock step: ros34pw2's and rodas4's own, and
+ * auto's while stiff when its stiff stepper is ros34pw2 (CD_AUTO_BDF = 0) */
+static int rosw_locator(const cd_integ *I)
+{
+    return rosenbrock(I->stepper) || (!CD_AUTO_BDF && I->stiff);
+}
+
 size_t cd_integ_stiff_size(const cd_model *m)
 {
     return (uses_rosw(m->opt.stepper) ? cd_rosw_size(m) : 0) +
@@ -283,13 +296,12 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_bdf_bind(I->drv->s, &I->bdf);
         }
         if (I->autom && CD_AUTO_BDF) {
-            /* auto's stiff stepper: msbdf, located as msbdf is (rk8pd sub-steps) */
+            /* auto's stiff stepper: msbdf, located as msbdf is (rk8pd sub-steps with
+             * I->loc; no stiff locator of its own) */
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_bdf, n);
-            I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
-            if (!I->s_stiff || !I->loc_stiff) goto nomem;
+            if (!I->s_stiff) goto nomem;
             cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_bdf_bind(I->s_stiff, &I->bdf);
-            cd_rosw_bind(I->loc_stiff, &I->rw, 1);
         } else if (I->autom) {
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
             I->loc_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
@@ -529,10 +541,10 @@ static int rk4_step(cd_integ *I, double t, double h, double *y, int use_fsal)
  * fixed-step mode) of length h from (t, y), y updated in place. */
 static int one_step(cd_integ *I, double t, double h, double *y)
 {
-    gsl_odeiv2_step *loc = I->stiff && !CD_AUTO_BDF ? I->loc_stiff : I->loc;
+    gsl_odeiv2_step *loc = I->loc_stiff && I->stiff ? I->loc_stiff : I->loc;
     if (I->fixed) return rk4_step(I, t, h, y, 0);
     /* a Rosenbrock locator starts afresh; rk8pd keeps nothing between steps */
-    if ((I->stiff && !CD_AUTO_BDF) || rosenbrock(I->stepper)) gsl_odeiv2_step_reset(loc);
+    if (rosw_locator(I)) gsl_odeiv2_step_reset(loc);
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
@@ -593,7 +605,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 static long trial_cost(const cd_integ *I)
 {
     if (I->loc_nsub > 0) return 14 * (long)I->loc_nsub;
-    return I->fixed ? 5 : (I->stiff && !CD_AUTO_BDF) || I->stepper == CD_STEP_ROS34PW2 ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : 14;
+    return I->fixed ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : rosw_locator(I) ? 5 : 14;
 }
 
 static int budget_left(const cd_data *d, const cd_integ *I, long need)
@@ -740,7 +752,7 @@ static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0,
  * step. */
 static int implicit_with_explicit_locator(const cd_integ *I)
 {
-    return I->stepper == CD_STEP_RK4IMP || I->stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && I->autom && I->stiff);
+    return I->stepper == CD_STEP_RK4IMP || on_bdf(I);
 }
 
 /* One locator step to t0 + tau, and the bracket end it certifies: the new
@@ -959,14 +971,17 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
     if (!I->stiff) {
         want = h * rho > CD_AUTO_STIFF;
     } else {
-        reach = rho > 0 ? CD_AUTO_STIFF / rho : HUGE_VAL;
-        if (hmax > 0 && reach > hmax) reach = hmax;
         /* the guess from rk8pd's stable step is ros34pw2's rule (its step costs 4 evaluations
          * and a factorisation, rk8pd's 13): msbdf's step is not bounded by stability, costs 2-3,
          * and starts at order 1 with a short step after every restart (a switch, an event),
          * where the guess asked for rk8pd after nearly every event (the Fig. 5 grasp twin: 21 874
          * evaluations with it, 16 941 without). With msbdf only the measured cost below decides. */
-        want = !CD_AUTO_BDF && reach > CD_AUTO_COST_RATIO * h;
+        want = 0;
+        if (!CD_AUTO_BDF) {
+            reach = rho > 0 ? CD_AUTO_STIFF / rho : HUGE_VAL;
+            if (hmax > 0 && reach > hmax) reach = hmax;
+            want = reach > CD_AUTO_COST_RATIO * h;
+        }
         /* measured: a whole window after the switch's own costlier than rk8pd's before it */
         if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp) want = 1;
     }
@@ -1239,8 +1254,7 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
             if (hmax > 0 && I->h > hmax) I->h = hmax;
             /* msbdf refuses a step that grows by more than 1.5x (zero-stability), and evolve
              * then halves it: propose the step it accepts (bdf.h) */
-            if (I->stepper == CD_STEP_MSBDF || (CD_AUTO_BDF && I->autom && I->stiff))
-                I->h = cd_bdf_step_limit(&I->bdf, t0, I->h);
+            if (on_bdf(I)) I->h = cd_bdf_step_limit(&I->bdf, t0, I->h);
             /* a step that would end within round-off of t1 would leave a sliver
              * step of ~1e-17 s: aim just past t1 so GSL lands exactly on it */
             if (I->h >= (t1 - t0) * (1.0 - 1e-12) && I->h < (t1 - t0) * (1.0 + 1e-9)) I->h = (t1 - t0) * (1.0 + 1e-9);
