@@ -58,7 +58,11 @@
 #define CD_AUTO_BDF 1
 #endif
 
-/* auto (CD_STEP_AUTO): a stiffness check runs every auto_every accepted
+/* auto (CD_STEP_AUTO): its stiff stepper is msbdf (CD_AUTO_BDF, above); the
+ * rules below were written for ros34pw2 and read the same with msbdf, except
+ * the guess of the stiff step (the second rule), which only ros34pw2 builds
+ * use: with msbdf only the measured cost hands back to rk8pd.
+ * A stiffness check runs every auto_every accepted
  * steps (CD_AUTO_EVERY, doubled up to CD_AUTO_EVERY_MAX after a switch that
  * was measured to be a mistake, below). With rho the spectral radius of the
  * Jacobian and h the step the stepper works at, rk8pd is stability-capped
@@ -143,7 +147,8 @@ typedef struct {
     cd_rosw rw;               /* ros34pw2: Jacobian and stage buffers, shared by stepper and locator */
     cd_gauss4 g4;             /* rk4imp: its stage and iteration-matrix buffers (its Jacobian: rw) */
     cd_bdf bdf;               /* msbdf: its history and iteration-matrix buffers (its Jacobian: rw) */
-    /* auto: drv->s and loc are rk8pd; the stiff pair below is ros34pw2 */
+    /* auto: drv->s and loc are rk8pd; the stiff pair below is ros34pw2 (CD_AUTO_BDF = 0;
+     * with msbdf the stiff steps are the BDF's own, bdf above) */
     gsl_odeiv2_step *s_stiff, *loc_stiff;
     int autom;                /* stepper is CD_STEP_AUTO */
     int stiff;                /* auto: the stiff stepper is the current one */
@@ -156,8 +161,9 @@ typedef struct {
     double auto_tc;           /* auto: start of the check window (the last check or switch) [s] */
     double auto_ec;           /* auto: evaluations in the window (whole number) */
     double auto_rate_exp;     /* auto: rk8pd's evaluations per simulated second in its last window before
-                               * the switch to ros34pw2 (0: none measured) */
-    double auto_rate_imp;     /* auto: ros34pw2's in its last window before the switch to rk8pd (0: none) */
+                               * the switch to the stiff stepper (0: none measured) */
+    double auto_rate_imp;     /* auto: the stiff stepper's in its last window before the switch to rk8pd
+                               * (0: none) */
 } cd_integ;
 
 static int rhs(double t, const double y[], double dydt[], void *params)
