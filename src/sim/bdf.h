@@ -20,7 +20,8 @@ typedef struct {
     double th[CD_BDF_NHIST];  /* their times */
     int nh;                   /* how many are kept */
     double *yp, *F, *dY, *f0, *psi, *ypred; /* (ny) Newton iterate, f, increment, f at the start, history term, predictor */
-    double *M, *r;            /* (na^2) LU of I - gamma J; (na) */
+    double *M, *r, *u, *rpz;  /* (na^2) LU of I - gamma J (reduced to the velocities when J is: rosw.c,
+                               * cd_rosw_factor_c); (na each) the Newton right-hand side, scratch */
     int *piv;                 /* (na) */
     double lu_gamma;          /* the gamma M is for; 0: none */
     int k, k_next, k_used, nk; /* order: current, chosen for the next step, of the last apply; steps at k */

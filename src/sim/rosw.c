@@ -428,27 +428,53 @@ void cd_rosw_lu_solve(const double *A, int n, const int *piv, double *b)
     }
 }
 
+int cd_rosw_factor_c(const cd_rosw *w, double c, double *W, int *perm)
+{
+    int na = w->na, i, j;
+    if (w->red) { /* S = I - c J_UU - c^2 M2 */
+        int nU = w->nU;
+        for (i = 0; i < nU; i++)
+            for (j = 0; j < nU; j++)
+                W[(size_t)i * nU + j] = (i == j ? 1.0 : 0.0) - c * w->J[(size_t)w->iU[i] * na + w->iU[j]] -
+                                        c * c * w->M2[(size_t)i * nU + j];
+        return nU && cd_rosw_lu_decomp(W, nU, perm) != 0 ? -1 : 0;
+    }
+    for (i = 0; i < na * na; i++) W[i] = -c * w->J[i];
+    for (i = 0; i < na; i++) W[i * na + i] += 1.0;
+    return na && cd_rosw_lu_decomp(W, na, perm) != 0 ? -1 : 0;
+}
+
+void cd_rosw_solve_c(const cd_rosw *w, double c, const double *W, const int *perm, double *r, double *u,
+                     double *rpz)
+{
+    int nPZ = w->nP + w->nZ, i, k, e;
+    if (!w->red) {
+        cd_rosw_lu_solve(W, w->na, perm, r);
+        return;
+    }
+    for (k = 0; k < nPZ; k++) rpz[k] = r[pz_at(w, k)];
+    for (i = 0; i < w->nU; i++) {
+        double acc = 0;
+        for (e = w->sp[i]; e < w->sp[i + 1]; e++) acc += w->sv[e] * rpz[w->sc[e]];
+        u[i] = r[w->iU[i]] + c * acc;
+    }
+    if (w->nU) cd_rosw_lu_solve(W, w->nU, perm, u);
+    for (k = 0; k < nPZ; k++) {
+        const int row = w->nU + k;
+        double acc = 0;
+        for (e = w->sp[row]; e < w->sp[row + 1]; e++) acc += w->sv[e] * u[w->sc[e]];
+        r[pz_at(w, k)] = rpz[k] + c * acc;
+    }
+    for (i = 0; i < w->nU; i++) r[w->iU[i]] = u[i];
+}
+
 static int factor(cd_rosw *w, double h)
 {
     int na = w->na, i;
-    if (w->red) { /* S = I - c J_UU - c^2 M2 */
-        int nU = w->nU, j;
-        double c = h * w->gam;
-        for (i = 0; i < nU; i++)
-            for (j = 0; j < nU; j++)
-                w->W[(size_t)i * nU + j] = (i == j ? 1.0 : 0.0) - c * w->J[(size_t)w->iU[i] * na + w->iU[j]] -
-                                           c * c * w->M2[(size_t)i * nU + j];
-        if (nU && cd_rosw_lu_decomp(w->W, nU, w->perm) != 0) return GSL_FAILURE;
-        w->lu_ok = 1;
-        w->lu_h = h;
-        return GSL_SUCCESS;
-    }
-    for (i = 0; i < na * na; i++) w->W[i] = -h * w->gam * w->J[i];
-    for (i = 0; i < na; i++) w->W[i * na + i] += 1.0;
-    if (na == 0) { w->lu_ok = 1; w->lu_h = h; return GSL_SUCCESS; }
-    if (cd_rosw_lu_decomp(w->W, na, w->perm) != 0) return GSL_FAILURE;
-    for (i = 0; i < na; i++)
-        if (!(fabs(w->W[i * na + i]) > 0) || !isfinite(w->W[i * na + i])) return GSL_FAILURE;
+    if (cd_rosw_factor_c(w, h * w->gam, w->W, w->perm) != 0) return GSL_FAILURE;
+    if (!w->red)
+        for (i = 0; i < na; i++)
+            if (!(fabs(w->W[i * na + i]) > 0) || !isfinite(w->W[i * na + i])) return GSL_FAILURE;
     w->lu_ok = 1;
     w->lu_h = h;
     return GSL_SUCCESS;
@@ -457,26 +483,7 @@ static int factor(cd_rosw *w, double h)
 /* r <- (I - h gamma J)^-1 r on the active set (the LU of factor) */
 static int solve_active(cd_rosw *w, double *r)
 {
-    int na = w->na, nPZ = w->nP + w->nZ, i, k, e;
-    double c = w->lu_h * w->gam, *u = w->tu, *rpz = w->g;
-    if (!w->red) {
-        cd_rosw_lu_solve(w->W, na, w->perm, r);
-        return GSL_SUCCESS;
-    }
-    for (k = 0; k < nPZ; k++) rpz[k] = r[pz_at(w, k)];
-    for (i = 0; i < w->nU; i++) {
-        double acc = 0;
-        for (e = w->sp[i]; e < w->sp[i + 1]; e++) acc += w->sv[e] * rpz[w->sc[e]];
-        u[i] = r[w->iU[i]] + c * acc;
-    }
-    if (w->nU) cd_rosw_lu_solve(w->W, w->nU, w->perm, u);
-    for (k = 0; k < nPZ; k++) {
-        const int row = w->nU + k;
-        double acc = 0;
-        for (e = w->sp[row]; e < w->sp[row + 1]; e++) acc += w->sv[e] * u[w->sc[e]];
-        r[pz_at(w, k)] = rpz[k] + c * acc;
-    }
-    for (i = 0; i < w->nU; i++) r[w->iU[i]] = u[i];
+    cd_rosw_solve_c(w, w->lu_h * w->gam, w->W, w->perm, r, w->tu, w->g);
     return GSL_SUCCESS;
 }
 

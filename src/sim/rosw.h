@@ -71,6 +71,15 @@ void cd_rosw_init(cd_rosw *w, const cd_model *m, cd_data *d, void *mem);
  * increment fd_eps. */
 size_t cd_rosw_size_plain(int ny);
 void cd_rosw_init_plain(cd_rosw *w, int ny, double fd_eps, void *mem);
+/* The LU of I - c J on the active set into W (na_max^2) and perm (na_max):
+ * of the velocities' block S = I - c J_UU - c^2 M2 when J was reduced
+ * (reduce() in rosw.c: a structured Jacobian), else of the whole na x na
+ * matrix. 0, or -1 on a zero pivot. */
+int cd_rosw_factor_c(const cd_rosw *w, double c, double *W, int *perm);
+/* r <- (I - c J)^-1 r, r over the active set, with the LU cd_rosw_factor_c
+ * made for the same c and the same J; u, rpz: scratch of na_max each. */
+void cd_rosw_solve_c(const cd_rosw *w, double c, const double *W, const int *perm, double *r, double *u,
+                     double *rpz);
 /* The next step recomputes the Jacobian (a restart: modes, inputs or state changed). */
 void cd_rosw_invalidate(cd_rosw *w);
 
