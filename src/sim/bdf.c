@@ -258,8 +258,12 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
  * ending at t1 with solution y1 (the history not yet including it). */
 static int choose_order(const cd_bdf *g, int k, double h, double t1, const double *y1)
 {
-    double x[CD_BDF_NHIST + 1], E[CD_BDF_KMAX + 2];
-    int m = g->nh < k + 2 ? g->nh : k + 2; /* history points used; m + 1 points in all */
+    double x[CD_BDF_NHIST + 1], E[CD_BDF_KMAX + 2], cqs[CD_BDF_KMAX + 2], hqs[CD_BDF_KMAX + 2];
+    /* the order may rise only after k + 1 steps at order k, and not past
+     * kmax: otherwise E[k + 1] is not needed, nor the highest divided
+     * difference (the lower ones are the same, bit for bit) */
+    const int up = k < g->kmax && g->nk + 1 >= k + 1, qmax = up ? k + 1 : k;
+    int m = g->nh < qmax + 1 ? g->nh : qmax + 1; /* history points used; m + 1 points in all */
     int q, c, i, j, kn = k;
     double best;
     x[0] = t1;
@@ -270,11 +274,20 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
      * whose points are all equal (skipped there: its divided differences are
      * exactly 0); most of a contact model's unknowns are such, the bristles
      * of the open slots */
-    for (q = (k > 1 ? k - 1 : 1); q <= k + 1 && q <= CD_BDF_KMAX; q++)
+    for (q = (k > 1 ? k - 1 : 1); q <= qmax && q <= CD_BDF_KMAX; q++)
         if (q + 1 <= m) E[q] = 0;
     /* the differences' denominators, x_i - x_{i-j}, once for every unknown */
     for (j = 1; j <= m; j++)
         for (i = m; i >= j; i--) dx[i][j] = x[i] - x[i - j];
+    /* and the error constants' factors q! h^q and 1 + ... + 1/q */
+    for (q = 1; q <= qmax && q <= CD_BDF_KMAX; q++) {
+        cqs[q] = 1;
+        hqs[q] = 0;
+        for (i = 1; i <= q; i++) {
+            cqs[q] *= i * h;
+            hqs[q] += 1.0 / i;
+        }
+    }
     for (c = 0; c < g->ny; c++) {
         double v[CD_BDF_NHIST + 1], sc;
         int moved = 0;
@@ -288,14 +301,10 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
         /* Newton's divided differences in place: v[i] = y[x_0..x_i] */
         for (j = 1; j <= m; j++)
             for (i = m; i >= j; i--) v[i] = (v[i] - v[i - 1]) / dx[i][j];
-        for (q = (k > 1 ? k - 1 : 1); q <= k + 1 && q <= CD_BDF_KMAX; q++) {
-            double cq = 1, hq = 0, e;
+        for (q = (k > 1 ? k - 1 : 1); q <= qmax && q <= CD_BDF_KMAX; q++) {
+            double e;
             if (q + 1 > m) continue; /* needs q + 2 points */
-            for (i = 1; i <= q; i++) {
-                cq *= i * h;
-                hq += 1.0 / i;
-            }
-            e = fabs(v[q + 1]) * cq * h / hq / sc;
+            e = fabs(v[q + 1]) * cqs[q] * h / hqs[q] / sc;
             if (e > E[q]) E[q] = e;
         }
     }
@@ -303,7 +312,7 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
     best = pow(fmax(E[k], 1e-300), -1.0 / (k + 1));
     if (k > 1 && E[k - 1] >= 0 && pow(fmax(E[k - 1], 1e-300), -1.0 / k) >= best) {
         kn = k - 1;
-    } else if (k < g->kmax && g->nk + 1 >= k + 1 && E[k + 1] >= 0 &&
+    } else if (up && E[k + 1] >= 0 &&
                pow(fmax(E[k + 1], 1e-300), -1.0 / (k + 2)) > best) {
         kn = k + 1;
     }
