@@ -430,10 +430,27 @@ static double gmin(const cd_model *m, const cd_data *d, int use_dwell, int *whic
 static void log_event(cd_data *d, const cd_event *ev)
 {
     cd_event *e = &d->ev[d->ev_count % d->ev_cap];
+    cd_integ *I = (cd_integ *)d->integ;
     *e = *ev;
     e->t = d->t;
     d->ev_count++;
     d->stats.nevents++;
+    /* auto: a contact that closes or opens changes the problem's stiffness,
+     * so a cost measured across it says little about either stepper after
+     * it: auto's measuring window starts again here (auto_check), and on the
+     * stiff stepper so does the count to the next check, so that the window
+     * it is judged on is a whole one (a window of a step or two, with this
+     * event's location in it, costs many times the steady rate). Without
+     * this, rk8pd's cost in free flight (700 evaluations per second on the
+     * capture twin) was held against msbdf's in the 5 ms after the first
+     * touch, and auto went back to rk8pd, which then spent 3 400 evaluations
+     * on 70 ms of contact onsets before the stiffness check sent it back. */
+    if (I && I->autom && ev->owner_kind == CD_OWNER_SLOT &&
+        (ev->mode_from == CD_MODE_OPEN) != (ev->mode_to == CD_MODE_OPEN)) {
+        I->auto_tc = d->t;
+        I->auto_ec = 0;
+        if (I->stiff) I->auto_next = I->auto_every;
+    }
 }
 
 /* the unit's transition under the chattering guard's bookkeeping: switches
