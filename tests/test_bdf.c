@@ -342,3 +342,62 @@ Test(bdf, continues_after_a_sliver_step)
     for (r = 0; r < 2; r++) cd_data_free(d[r]);
     cd_scenario_free(sc);
 }
+
+/* cd_bdf_trial, the locator of events on msbdf's own solution: after a step
+ * of order 3 from t = 0 (h = 0.05, history from exact values), a trial to
+ * the step's end is that step's solution, and a trial to 0.03 is the BDF
+ * step of that length over the same history (a second instance, stepped
+ * there directly), both within the Newton tolerances (the step's 0.01, the
+ * trial's 1e-4 of the scale 1e-12 (1 + |y|): differences of a few 1e-14).
+ * The trials leave the history as it was: the next step, which accepts the
+ * pending one, ends where it ends without them (within the same tolerance:
+ * a trial may leave another iteration matrix). A trial from anywhere but the
+ * pending step's start is refused. */
+Test(bdf, trial_step_is_the_step_of_that_length)
+{
+    gsl_odeiv2_system sys = {smooth_f, smooth_j, 2, NULL};
+    const double h = 0.05;
+    double y1[2], yt[2], yr[2], yn[2], yb[2], err[2], u[2];
+    plain P[3];
+    int r, i;
+    for (r = 0; r < 3; r++) {
+        plain_open(&P[r], 2, 1e-12);
+        P[r].g.kfix = 3;
+        for (i = 3; i >= 0; i--) {
+            exact(-i * h, u);
+            cd_bdf_seed(&P[r].g, -i * h, u);
+        }
+    }
+    exact(0, y1);
+    memcpy(yn, y1, sizeof y1);
+    memcpy(yr, y1, sizeof y1);
+    cr_assert_eq(gsl_odeiv2_step_apply(P[0].s, 0.0, h, y1, err, NULL, NULL, &sys), GSL_SUCCESS);
+    cr_assert_eq(gsl_odeiv2_step_apply(P[1].s, 0.0, h, yn, err, NULL, NULL, &sys), GSL_SUCCESS);
+    cr_assert_eq(gsl_odeiv2_step_apply(P[2].s, 0.0, 0.03, yr, err, NULL, NULL, &sys), GSL_SUCCESS);
+    /* to the step's end: the step */
+    cr_assert_eq(cd_bdf_trial(&P[0].g, &sys, 0.0, h, yt), GSL_SUCCESS);
+    for (i = 0; i < 2; i++)
+        cr_expect_lt(fabs(yt[i] - y1[i]), 1e-13, "trial to h, component %d: %.17g, the step %.17g", i, yt[i], y1[i]);
+    /* to 0.03: the BDF step of that length */
+    cr_assert_eq(cd_bdf_trial(&P[0].g, &sys, 0.0, 0.03, yt), GSL_SUCCESS);
+    for (i = 0; i < 2; i++)
+        cr_expect_lt(fabs(yt[i] - yr[i]), 1e-13, "trial to 0.03, component %d: %.17g, a step of 0.03 %.17g", i, yt[i],
+                     yr[i]);
+    exact(0.03, u);
+    cr_expect_gt(fabs(yt[0] - u[0]) + fabs(yt[1] - u[1]), 1e-15, "not the exact solution by accident");
+    cr_expect_lt(fabs(yt[0] - u[0]) + fabs(yt[1] - u[1]), 1e-6, "trial to 0.03 off the solution by %.3e",
+                 fabs(yt[0] - u[0]) + fabs(yt[1] - u[1]));
+    /* elsewhere: refused, nothing computed */
+    cr_expect_eq(cd_bdf_trial(&P[0].g, &sys, 0.01, 0.02, yt), GSL_FAILURE);
+    /* the history as it was: the next step ends where it ends without the trials */
+    memcpy(yb, y1, sizeof y1);
+    cr_assert_eq(gsl_odeiv2_step_apply(P[0].s, h, h, yb, err, NULL, NULL, &sys), GSL_SUCCESS);
+    cr_assert_eq(gsl_odeiv2_step_apply(P[1].s, h, h, yn, err, NULL, NULL, &sys), GSL_SUCCESS);
+    cr_expect_eq(P[0].g.nh, P[1].g.nh, "history points %d and %d", P[0].g.nh, P[1].g.nh);
+    for (i = 0; i < 2; i++)
+        cr_expect_lt(fabs(yb[i] - yn[i]), 1e-13, "the step after the trials, component %d: %.17g, without %.17g", i,
+                     yb[i], yn[i]);
+    cr_expect_eq(P[0].g.ntrial, 2, "trials solved %ld", P[0].g.ntrial);
+    cr_expect_eq(P[0].g.ntrial_fail, 1, "refused trials %ld", P[0].g.ntrial_fail);
+    for (r = 0; r < 3; r++) plain_close(&P[r]);
+}

@@ -87,11 +87,11 @@ Test(locate, onset_on_a_circle_at_the_closed_form_time_with_few_locator_steps)
      * integration's error at rtol 1e-10, ~1e-11 s at 1.4 m/s), in at most 8
      * locator steps (2 when both certifications hold; the old bracket over
      * the rest of the step took 23 and 25), at two spin rates and with
-     * rk8pd and auto */
-    const cd_stepper st[2] = {CD_STEP_RK8PD, CD_STEP_AUTO};
+     * rk8pd, auto and msbdf (whose trials are its own steps, cd_bdf_trial) */
+    const cd_stepper st[3] = {CD_STEP_RK8PD, CD_STEP_AUTO, CD_STEP_MSBDF};
     const double w[2] = {10.0, 30.0};
     int i, j;
-    for (i = 0; i < 2; i++)
+    for (i = 0; i < 3; i++)
         for (j = 0; j < 2; j++) {
             double ts = asin(0.7) / w[j];
             spin_out o = spin_run(st[i], w[j], 0);

@@ -78,6 +78,13 @@
  * the history; so does reset() (events, breakpoints, snapshots: the
  * integrator's restarts).
  *
+ * Event location (cd_bdf_trial): the integrator's locator asks for the
+ * solution at t0 + tau inside an accepted step from t0; msbdf gives the BDF
+ * step of that length from the same history (the step it would have taken),
+ * its Newton iteration carried to CD_BDF_KAPPA_TRIAL so that the located
+ * state is smooth in tau, the history untouched. The event then restarts the
+ * history anyway.
+ *
  * Cost per step: one evaluation per Newton iteration (often 1-3), one for
  * dydt_out (the exact f(t + h, y1), handed back by evolve as the next
  * dydt_in), an LU only when gamma moved by > 30% or J was renewed (of the
@@ -214,11 +221,15 @@ static int factor(cd_bdf *g, double gamma)
 }
 
 /* Solves Y - gamma f(t1, Y) + psi = 0 (psi already times gamma) for Y,
- * starting from Y = yp; the result is left in yp. */
-static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *sys)
+ * starting from Y = yp; the result is left in yp. The
+ * iteration converges at kappa; when it stalls (theta >= 0.99, or
+ * CD_BDF_NEWTON_MAX iterations) after an iterate already met kappa_ok >=
+ * kappa, that iterate is the result (cd_bdf_trial asks for kappa below
+ * the round-off of a tight tolerance; the steps pass kappa_ok = kappa). */
+static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *sys, double kappa, double kappa_ok)
 {
     const cd_rosw *w = g->rw;
-    int n = g->ny, na = w->na, it, a, c;
+    int n = g->ny, na = w->na, it, a, c, met = 0;
     double prev = 0, eta = pow(fmax(g->eta, DBL_EPSILON), 0.8), theta;
     double *Y = g->yp;
     for (it = 0; it < CD_BDF_NEWTON_MAX; it++) {
@@ -239,19 +250,24 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
         if (!isfinite(dn)) return GSL_EBADFUNC;
         if (it > 0) {
             theta = prev > 0 ? dn / prev : 0.0;
-            if (theta >= 0.99) return GSL_FAILURE;
+            if (theta >= 0.99) return met ? GSL_SUCCESS : GSL_FAILURE;
             eta = theta / (1.0 - theta);
         }
         for (c = 0; c < n; c++) Y[c] += g->dY[c];
         prev = dn;
-        if (eta * dn <= CD_BDF_KAPPA || dn == 0) {
+        if (eta * dn <= kappa || dn == 0) {
             g->eta = eta;
             for (c = 0; c < n; c++)
                 if (!isfinite(Y[c])) return GSL_EBADFUNC;
             return GSL_SUCCESS;
         }
+        if (eta * dn <= kappa_ok) {
+            for (c = 0; c < n; c++)
+                if (!isfinite(Y[c])) return GSL_EBADFUNC;
+            met = 1;
+        }
     }
-    return GSL_FAILURE;
+    return met ? GSL_SUCCESS : GSL_FAILURE;
 }
 
 /* The order for the next step after an accepted step of order k and size h
@@ -361,13 +377,50 @@ double cd_bdf_step_limit(const cd_bdf *g, double t, double h)
     return h > CD_BDF_RATIO_MAX * last ? CD_BDF_RATIO_MAX * last : h;
 }
 
+/* The corrector of order k from the newest history point to t1: psi (the
+ * history's part, times gamma) into g->psi; returns alpha0 (gamma =
+ * 1/alpha0). The coefficients are on x_0 = t1, x_j = th[j-1] (times from t1). */
+static double corrector(cd_bdf *g, int k, double t1)
+{
+    int n = g->ny, j, m, c;
+    double alpha0 = 0, gamma;
+    for (j = 1; j <= k; j++) alpha0 += 1.0 / (t1 - g->th[j - 1]);
+    memset(g->psi, 0, (size_t)n * sizeof(double));
+    for (j = 1; j <= k; j++) {
+        double xj = g->th[j - 1] - t1, num = 1, den = xj, aj; /* den: (x_j - x_0) */
+        for (m = 1; m <= k; m++) {
+            if (m == j) continue;
+            num *= -(g->th[m - 1] - t1);
+            den *= xj - (g->th[m - 1] - t1);
+        }
+        aj = num / den;
+        for (c = 0; c < n; c++) g->psi[c] += aj * g->Y[j - 1][c];
+    }
+    gamma = 1.0 / alpha0;
+    for (c = 0; c < n; c++) g->psi[c] *= gamma;
+    return alpha0;
+}
+
+/* The predictor: the polynomial through the k + 1 newest points at t1, into g->yp */
+static void predict(cd_bdf *g, int k, double t1)
+{
+    int n = g->ny, j, m, c;
+    memset(g->yp, 0, (size_t)n * sizeof(double));
+    for (j = 0; j <= k; j++) {
+        double L = 1;
+        for (m = 0; m <= k; m++)
+            if (m != j) L *= (t1 - g->th[m]) / (g->th[j] - g->th[m]);
+        for (c = 0; c < n; c++) g->yp[c] += L * g->Y[j][c];
+    }
+}
+
 static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], double yerr[], const double dydt_in[],
                      double dydt_out[], const gsl_odeiv2_system *sys)
 {
     bdf_state *s = (bdf_state *)vs;
     cd_bdf *g = s->g;
     cd_rosw *w;
-    int n = (int)dim, c, j, m, k, st, retry;
+    int n = (int)dim, c, k, st, retry;
     double t1 = t + h, alpha0 = 0, gamma, C, hp;
     const double *f0 = dydt_in;
     if (!g || n != g->ny || !(h > 0)) return GSL_EINVAL;
@@ -430,33 +483,14 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
     s->have_prev = 1;
     s->t_prev = t;
     g->renew = 1; /* cleared when the step succeeds */
-    /* the corrector's coefficients on x_0 = t1, x_j = th[j-1] (times from t1) */
-    for (j = 1; j <= k; j++) alpha0 += 1.0 / (t1 - g->th[j - 1]);
-    memset(g->psi, 0, (size_t)n * sizeof(double));
-    for (j = 1; j <= k; j++) {
-        double xj = g->th[j - 1] - t1, num = 1, den = xj, aj; /* den: (x_j - x_0) */
-        for (m = 1; m <= k; m++) {
-            if (m == j) continue;
-            num *= -(g->th[m - 1] - t1);
-            den *= xj - (g->th[m - 1] - t1);
-        }
-        aj = num / den;
-        for (c = 0; c < n; c++) g->psi[c] += aj * g->Y[j - 1][c];
-    }
+    alpha0 = corrector(g, k, t1);
     gamma = 1.0 / alpha0;
-    for (c = 0; c < n; c++) g->psi[c] *= gamma;
     /* the predictor and the error constant */
     if (g->nh == 1) {
         for (c = 0; c < n; c++) g->yp[c] = y[c] + h * f0[c];
         C = 2.0;
     } else {
-        memset(g->yp, 0, (size_t)n * sizeof(double));
-        for (j = 0; j <= k; j++) {
-            double L = 1;
-            for (m = 0; m <= k; m++)
-                if (m != j) L *= (t1 - g->th[m]) / (g->th[j] - g->th[m]);
-            for (c = 0; c < n; c++) g->yp[c] += L * g->Y[j][c];
-        }
+        predict(g, k, t1);
         C = (t1 - g->th[k]) * alpha0;
     }
     memcpy(g->ypred, g->yp, (size_t)n * sizeof(double)); /* yp becomes Y */
@@ -466,7 +500,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             return GSL_FAILURE;
         }
     }
-    st = newton(g, t1, gamma, sys);
+    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA);
     if (st == GSL_FAILURE && (g->lu_gamma != gamma || w->jac_t != t)) {
         /* an old matrix or Jacobian: once more with the step's own (CVODE's
          * recovery from a convergence failure) */
@@ -481,7 +515,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             if (cd_rosw_jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
         }
         st = factor(g, gamma);
-        if (st == GSL_SUCCESS) st = newton(g, t1, gamma, sys);
+        if (st == GSL_SUCCESS) st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA);
     }
     if (st != GSL_SUCCESS) {
         g->nfail++;
@@ -500,6 +534,33 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
     g->nsteps_k[k]++;
     w->jac_age++;
     if (dydt_out && GSL_ODEIV_FN_EVAL(sys, t1, y, dydt_out) != GSL_SUCCESS) return GSL_EBADFUNC;
+    return GSL_SUCCESS;
+}
+
+int cd_bdf_trial(cd_bdf *g, const gsl_odeiv2_system *sys, double t0, double tau, double *y)
+{
+    int n = g->ny, k = g->k_used, st;
+    double t1 = t0 + tau, gamma, eta_save = g->eta;
+    if (!g->have_pend || g->nh < 1 || g->th[0] != t0 || !(tau > 0) || k < 1 || k > g->nh) {
+        g->ntrial_fail++;
+        return GSL_FAILURE;
+    }
+    gamma = 1.0 / corrector(g, k, t1);
+    /* the predictor: the history's polynomial (y0 alone after a restart) */
+    if (g->nh < k + 1) memcpy(g->yp, g->Y[0], (size_t)n * sizeof(double));
+    else predict(g, k, t1);
+    if (g->lu_gamma == 0 || fabs(gamma / g->lu_gamma - 1.0) > CD_BDF_GAMMA_TOL) {
+        if (factor(g, gamma) != GSL_SUCCESS) return GSL_FAILURE;
+    }
+    g->eta = 1.0;
+    g->ntrial++;
+    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA_TRIAL, CD_BDF_KAPPA);
+    g->eta = eta_save;
+    if (st != GSL_SUCCESS) {
+        g->ntrial_fail++;
+        return st;
+    }
+    memcpy(y, g->yp, (size_t)n * sizeof(double));
     return GSL_SUCCESS;
 }
 

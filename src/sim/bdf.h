@@ -8,6 +8,7 @@
 #define CD_BDF_NHIST 7       /* solution points kept: order k + 2 for the order choice */
 #define CD_BDF_NEWTON_MAX 10 /* Newton iterations before the step is given up (evolve halves it) */
 #define CD_BDF_KAPPA 0.01    /* Newton stops when its estimated remaining error is below this x tolerance */
+#define CD_BDF_KAPPA_TRIAL 1e-4 /* ... in cd_bdf_trial: a locator's solution must be smooth in its length */
 #define CD_BDF_GAMMA_TOL 0.3 /* the iteration matrix is refactored when h/alpha0 changed by more */
 #define CD_BDF_RATIO_MAX 1.5 /* above order 1 a step grows by at most this factor (else refused) */
 #define CD_BDF_SLIVER 1e-6   /* ... unless the last step was shorter than this times the new one: a
@@ -33,6 +34,7 @@ typedef struct {
     double eta;               /* the last contraction estimate theta / (1 - theta) */
     int renew;                /* the last step failed in Newton: renew an old Jacobian */
     long nnewton, nfail, nratio, nsteps_k[CD_BDF_KMAX + 1]; /* Newton iterations, failed solves, refused step growths, steps per order */
+    long ntrial, ntrial_fail; /* cd_bdf_trial: trials solved; trials refused or failed (tests) */
 } cd_bdf;
 
 size_t cd_bdf_size(const cd_model *m);
@@ -42,6 +44,15 @@ void cd_bdf_init_plain(cd_bdf *g, cd_rosw *rw, int ny, double rtol, double atol,
 /* Tests: appends (t, y) as the newest accepted point of the history (a
  * startup from known values). */
 void cd_bdf_seed(cd_bdf *g, double t, const double *y);
+
+/* Event location on msbdf's own solution: the step of the pending (last
+ * applied) step's order from its start (t0, the history's newest point) to
+ * t0 + tau, tau in (0, h], over the same history, its Newton iteration
+ * carried to CD_BDF_KAPPA_TRIAL; the result in y. The history and the
+ * pending step are left as they are (the LU may be renewed for the trial's
+ * gamma). GSL_SUCCESS, GSL_FAILURE (not at the pending step's start, or
+ * Newton did not converge) or GSL_EBADFUNC (a non-finite value). */
+int cd_bdf_trial(cd_bdf *g, const gsl_odeiv2_system *sys, double t0, double tau, double *y);
 
 /* The step the next apply at t would take instead of h: h, or the longest
  * step its growth rule (CD_BDF_RATIO_MAX) lets it take, with the history

@@ -57,6 +57,12 @@
 #ifndef CD_AUTO_BDF
 #define CD_AUTO_BDF 1
 #endif
+/* msbdf (alone, or auto's stiff phases) locates its events on its own trial
+ * steps (1, since 2026-11-28: cd_bdf_trial, docs/events.md), or on rk8pd
+ * sub-steps across its step as before (0: for comparisons) */
+#ifndef CD_BDF_LOCATOR
+#define CD_BDF_LOCATOR 1
+#endif
 
 /* auto (CD_STEP_AUTO): its stiff stepper is msbdf (CD_AUTO_BDF, above); the
  * rules below were written for ros34pw2 and read the same with msbdf, except
@@ -154,6 +160,7 @@ typedef struct {
     int stiff;                /* auto: the stiff stepper is the current one */
     int auto_hits;            /* consecutive checks that asked for the other stepper */
     int loc_nsub;             /* rk4imp, msbdf: the locator's sub-steps over the step an event is located in */
+    int loc_bdf;              /* msbdf: this event is located on msbdf's own trial steps (cd_bdf_trial) */
     double loc_hsub;          /* ... and their length (0: one locator step per trial) */
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled after a switch measured to be a mistake) */
@@ -571,8 +578,9 @@ static int one_step(cd_integ *I, double t, double h, double *y)
     return gsl_odeiv2_step_apply(loc, t, h, y, I->yerr, NULL, NULL, &I->sys);
 }
 
-/* rk4imp and msbdf locate with rk8pd steps across their own (implicit)
- * step, which may be far beyond rk8pd's stability limit on a stiff
+/* rk4imp (and msbdf when one of its own trials fails: trial()) locates
+ * with rk8pd steps across its own (implicit) step, which may be far beyond
+ * rk8pd's stability limit on a stiff
  * problem: the step of length h is cut into n equal rk8pd sub-steps with
  * rho h/n within rk8pd's real stability interval (CD_AUTO_STIFF, about half
  * of it; at most CD_LOC_MAX_SUB, beyond which the sub-steps stay unstable),
@@ -595,6 +603,16 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
 {
     int st = GSL_SUCCESS, k, nfull = 0;
     double hs = I->loc_hsub;
+    if (I->loc_bdf) {
+        /* msbdf's own step to tau over its history. Should one fail (its
+         * Newton iteration, or a history that does not start at t0), this
+         * event's remaining trials take rk8pd sub-steps, as before (2 of the
+         * 1 359 trials of the shipped scenarios run with auto) */
+        st = cd_bdf_trial(&I->bdf, &I->sys, t0, tau, y);
+        if (st == GSL_SUCCESS) goto evaluate;
+        I->loc_bdf = 0;
+        st = GSL_SUCCESS;
+    }
     memcpy(y, I->y0, (size_t)m->ny * sizeof(double));
     if (hs > 0) {
         nfull = (int)floor(tau / hs);
@@ -603,6 +621,7 @@ static cd_status trial(const cd_model *m, cd_data *d, cd_integ *I, double t0, do
     }
     for (k = 0; k < nfull && st == GSL_SUCCESS; k++) st = one_step(I, t0 + k * hs, hs, y);
     if (st == GSL_SUCCESS) st = one_step(I, t0 + nfull * hs, tau - nfull * hs, y);
+evaluate:
     d->stats.nlocate_steps++;
     if (st != GSL_SUCCESS) return CD_ENUMERIC;
     d->y = y;
@@ -627,6 +646,7 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 /* evaluations one more locator iteration costs (its stages and the forward) */
 static long trial_cost(const cd_integ *I)
 {
+    if (I->loc_bdf) return CD_BDF_NEWTON_MAX + 1;
     if (I->loc_nsub > 0) return 14 * (long)I->loc_nsub;
     return I->fixed ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : rosw_locator(I) ? 5 : 14;
 }
@@ -766,8 +786,10 @@ static cd_status illinois(const cd_model *m, cd_data *d, cd_integ *I, double t0,
  * at most 3) brackets it: the Illinois iterations on locator steps then
  * start from a bracket a few times that distance wide instead of the rest
  * of the step. Every bracket end is still the integrator's own solution.
- * Not for rk4imp and msbdf: their locator is rk8pd across a step of an
- * implicit method. Before its sub-steps (loc_substeps) that step could lie
+ * Not for rk4imp and msbdf (msbdf now locates on its own trial steps,
+ * cd_bdf_trial, with rk8pd sub-steps only as a fallback; the probe has not
+ * been measured with them). With rk8pd across a step of an implicit
+ * method: before its sub-steps (loc_substeps) that step could lie
  * far outside rk8pd's stability region, where the distance estimate meant
  * nothing; with them the probe would be sound, but on the Fig. 5 grasp at
  * rtol 1e-9 ... 1e-11 it changed little (msbdf 0 to -3 % evaluations,
@@ -869,7 +891,10 @@ static cd_status locate(const cd_model *m, cd_data *d, cd_integ *I, double t0, d
                         int *trigger)
 {
     /* the locator's sub-steps (set in locate_in) hold for this event only */
-    cd_status st = locate_in(m, d, I, t0, t1, g_hi, trigger);
+    cd_status st;
+    I->loc_bdf = CD_BDF_LOCATOR && on_bdf(I);
+    st = locate_in(m, d, I, t0, t1, g_hi, trigger);
+    I->loc_bdf = 0;
     I->loc_nsub = 0;
     I->loc_hsub = 0.0;
     return st;
