@@ -444,10 +444,15 @@ static void integrator_final(const cd_h5r *r, const char *stepper, const char *r
         snprintf(line + used, len - used, "; %lld Jacobians (in the evaluations)", nj);
     }
     if (stepper && strcmp(stepper, "auto") == 0 && nws >= 0 && nwe >= 0) {
+        /* with interpolated samples the last step may end past the run's end:
+         * the time on msbdf within the run is at most the run (stats_t_stiff
+         * keeps the stepper's own count) */
+        double ts = tstiff > 0 ? tstiff : 0.0;
+        if (tfin > 0 && ts > tfin) ts = tfin;
         used = strlen(line);
         snprintf(line + used, len - used,
-                 "; auto: %lld switches to msbdf and %lld back to rk8pd, msbdf for %.3g of %.3g s", nws, nwe,
-                 tstiff > 0 ? tstiff : 0.0, tfin);
+                 "; auto: %lld switches to msbdf and %lld back to rk8pd, msbdf for %.3g of %.3g s", nws, nwe, ts,
+                 tfin);
     }
 }
 
