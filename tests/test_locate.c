@@ -11,6 +11,7 @@
 #include <criterion/criterion.h>
 #include <capdyn/capdyn.h>
 #include "scene_util.h"
+#include "../src/sim/integ.h"
 
 #include <math.h>
 
@@ -30,6 +31,7 @@ typedef struct {
     long nloc;     /* locator steps */
     long ninterp;  /* iterations on the interpolant */
     long nother;   /* events of other slots than 0 (the rotating point on the upper plane) */
+    long ntrial, ntrial_fail; /* msbdf's own locator trials: solved, failed (cd_integ_locator_counts) */
 } spin_out;
 
 static spin_out spin_run(cd_stepper stepper, double w, int hover)
@@ -74,6 +76,7 @@ static spin_out spin_run(cd_stepper stepper, double w, int hover)
     o.nloc = d->stats.nlocate_steps;
     o.ninterp = d->stats.nlocate_interp;
     o.nother = 0;
+    cd_integ_locator_counts(d, &o.ntrial, &o.ntrial_fail);
     for (i = 0; i < d->ev_count; i++)
         if (cd_data_event(d, i)->slot != 0) o.nother++; /* (mu = 0: the onset goes on to slip at once) */
     cd_data_free(d);
@@ -104,6 +107,10 @@ Test(locate, onset_on_a_circle_at_the_closed_form_time_with_few_locator_steps)
             cr_expect_leq(fabs(t - ts), 2e-10, "%s, w %g: onset at %.15g s, closed form %.15g s", cd_stepper_name(st[i]),
                           w[j], t, ts);
             cr_expect_leq(nloc, 8, "%s, w %g: %ld locator steps", cd_stepper_name(st[i]), w[j], nloc);
+            if (st[i] == CD_STEP_MSBDF) { /* its locator steps are its own trials, none fell back to rk8pd */
+                cr_expect_eq(o.ntrial, nloc, "msbdf, w %g: %ld own trials for %ld locator steps", w[j], o.ntrial, nloc);
+                cr_expect_eq(o.ntrial_fail, 0, "msbdf, w %g: %ld trials failed", w[j], o.ntrial_fail);
+            }
         }
 }
 

@@ -33,6 +33,10 @@ int cd_integ_state_check(const cd_model *m, const double *buf, char *why, size_t
 /* dst takes what an evaluation needs of src's state (state.c; the sampler). */
 void cd_state_copy_eval(const cd_model *m, cd_data *dst, const cd_data *src);
 
+/* msbdf's own locator trials (cd_bdf_trial) in this data so far: solved,
+ * and refused or failed (each failure fell back to rk8pd sub-steps); tests. */
+void cd_integ_locator_counts(const cd_data *d, long *ntrial, long *nfail);
+
 /* Static equilibrium of the closed contacts and stops (equilibrium.c). */
 cd_status cd_equilibrium_start(const cd_model *m, cd_data *d, cd_error *err);
 

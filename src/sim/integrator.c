@@ -165,6 +165,8 @@ typedef struct {
     long auto_next;           /* accepted steps until the next stiffness check */
     long auto_every;          /* steps between checks (doubled after a switch measured to be a mistake) */
     long auto_since;          /* accepted steps since the last switch */
+    long auto_nrhs_reset;     /* auto: stats.nrhs when an event last restarted the window (log_event):
+                               * that step's evaluations before it stay out of the new window */
     double auto_tc;           /* auto: start of the check window (the last check or switch) [s] */
     double auto_ec;           /* auto: evaluations in the window (whole number) */
     double auto_rate_exp;     /* auto: rk8pd's evaluations per simulated second in its last window before
@@ -354,6 +356,7 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     I->auto_since = 0;
     I->auto_tc = d->t;
     I->auto_ec = 0;
+    I->auto_nrhs_reset = 0;
     I->auto_rate_exp = 0;
     I->auto_rate_imp = 0;
     I->have_end = 0;
@@ -456,6 +459,7 @@ static void log_event(cd_data *d, const cd_event *ev)
         (ev->mode_from == CD_MODE_OPEN) != (ev->mode_to == CD_MODE_OPEN)) {
         I->auto_tc = d->t;
         I->auto_ec = 0;
+        I->auto_nrhs_reset = d->stats.nrhs;
         if (I->stiff) I->auto_next = I->auto_every;
     }
 }
@@ -646,7 +650,8 @@ static void restore_start(const cd_model *m, cd_data *d, cd_integ *I, double t0,
 /* evaluations one more locator iteration costs (its stages and the forward) */
 static long trial_cost(const cd_integ *I)
 {
-    if (I->loc_bdf) return CD_BDF_NEWTON_MAX + 1;
+    /* msbdf's own trial, and room for the rk8pd fallback should it fail (trial()) */
+    if (I->loc_bdf) return CD_BDF_NEWTON_MAX + 1 + 14 * (long)(I->loc_nsub > 0 ? I->loc_nsub : 1);
     if (I->loc_nsub > 0) return 14 * (long)I->loc_nsub;
     return I->fixed ? 5 : I->stepper == CD_STEP_RODAS4 ? 7 : rosw_locator(I) ? 5 : 14;
 }
@@ -1031,7 +1036,9 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
             want = reach > CD_AUTO_COST_RATIO * h;
         }
         /* measured: a whole window after the switch's own costlier than rk8pd's before it */
-        if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp) want = 1;
+        if (!want && I->auto_rate_exp > 0 && I->auto_since > I->auto_every && rate > I->auto_rate_exp &&
+            rate < HUGE_VAL)
+            want = 1;
     }
     if (!want) { I->auto_hits = 0; return; }
     if (++I->auto_hits >= 2) {
@@ -1040,7 +1047,7 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
          * back, in its window before it was given up: the round trip was a
          * mistake, whichever rule asked for it; check less often */
         const double back = to_stiff ? I->auto_rate_imp : I->auto_rate_exp;
-        if (back > 0 && rate > back) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
+        if (back > 0 && rate > back && rate < HUGE_VAL) I->auto_every = 2 * I->auto_every < CD_AUTO_EVERY_MAX ? 2 * I->auto_every : CD_AUTO_EVERY_MAX;
         else I->auto_every = CD_AUTO_EVERY;
         I->auto_next = I->auto_every;
         I->auto_rate_exp = to_stiff && rate < HUGE_VAL ? rate : 0;
@@ -1264,7 +1271,8 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
     *started = 1;
     while (d->t < t_end) {
         double t0 = d->t, t1 = t_end, tdw, tbr, g1;
-        const long nrhs0 = d->stats.nrhs; /* auto: this step's evaluations, its event's included */
+        const long nrhs0 = d->stats.nrhs; /* auto: this step's evaluations, its event's included (but not
+                                           * those before a contact change restarted the window) */
         int status, at_dwell_end, at_break;
         /* a schedule breakpoint reached (rows, waypoints, clutch schedules):
          * new rows, restart, re-check the modes */
@@ -1414,8 +1422,9 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
                 }
         }
         if (I->autom) {
-            if (I->stiff) d->stats.t_stiff += d->stats.h_last;
-            I->auto_ec += (double)(d->stats.nrhs - nrhs0);
+            /* the step as it ended: an event cut it short (h_last is the step before locate) */
+            if (I->stiff) d->stats.t_stiff += d->t - t0;
+            I->auto_ec += (double)(d->stats.nrhs - (nrhs0 > I->auto_nrhs_reset ? nrhs0 : I->auto_nrhs_reset));
             auto_check(m, d, I);
         }
         if (!I->fixed && I->h < d->opt.h_min && d->t < t_end) {
@@ -1439,6 +1448,13 @@ static cd_status advance(const cd_model *m, cd_data *d, double t_end, cd_step_ca
     }
     /* a schedule row that starts exactly at t_end belongs to the next call */
     return CD_OK;
+}
+
+void cd_integ_locator_counts(const cd_data *d, long *ntrial, long *nfail)
+{
+    const cd_integ *I = (const cd_integ *)d->integ;
+    *ntrial = I ? I->bdf.ntrial : 0;
+    *nfail = I ? I->bdf.ntrial_fail : 0;
 }
 
 cd_status cd_sim_advance(const cd_model *m, cd_data *d, double t_end, cd_step_callback cb, void *user,
@@ -1566,6 +1582,7 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     I->stiff = I->autom && b[10] != 0; I->auto_hits = (int)b[11]; I->auto_next = (long)b[12];
     I->auto_every = (long)b[13]; I->auto_since = (long)b[14];
     I->auto_tc = b[15]; I->auto_ec = b[16]; I->auto_rate_exp = b[17]; I->auto_rate_imp = b[18];
+    I->auto_nrhs_reset = 0; /* only ever read within the step that set it */
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
     memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
     /* callbacks are this process's: the restored data keeps its own, unchanged */
