@@ -351,24 +351,40 @@ static void *bdf_alloc(size_t dim)
 
 static int near(double a, double b, double h) { return fabs(a - b) <= 1e-6 * fabs(h); }
 
+/* What GSL's evolve did with the pending step, as a call at t with step h
+ * tells: accepted (t is its end), rejected by the error test (t is its
+ * start), the same start again (a refused or failed step), or a restart
+ * (anywhere else). bdf_apply acts on it; cd_bdf_step_limit predicts that. */
+enum { PEND_ACCEPTED, PEND_REJECTED, PEND_SAME_START, PEND_RESTART };
+static int pending_outcome(const cd_bdf *g, double t, double h)
+{
+    const double hp = g->t1p - g->t0p;
+    if (g->have_pend && near(t, g->t1p, hp)) return PEND_ACCEPTED;
+    if (g->have_pend && near(t, g->t0p, hp)) return PEND_REJECTED;
+    if (g->nh > 0 && near(t, g->th[0], h)) return PEND_SAME_START;
+    return PEND_RESTART;
+}
+
 double cd_bdf_step_limit(const cd_bdf *g, double t, double h)
 {
-    double hp = g->t1p - g->t0p, last;
+    const int pend = pending_outcome(g, t, h);
+    double last;
     int k, nh;
-    if (g->have_pend && near(t, g->t1p, hp)) { /* the pending step accepted: pushed, then the order it chose */
+    switch (pend) {
+    case PEND_ACCEPTED: /* pushed, then the order it chose */
         last = t - g->t0p;
         nh = g->nh < CD_BDF_NHIST ? g->nh + 1 : CD_BDF_NHIST;
         k = g->k_next;
-    } else if (g->have_pend && near(t, g->t0p, hp)) { /* rejected by the error test */
+        break;
+    case PEND_REJECTED:
+    case PEND_SAME_START:
         if (g->nh < 2) return h;
         last = g->th[0] - g->th[1];
         nh = g->nh;
-        k = g->nrej + 1 >= 3 ? 1 : g->k;
-    } else if (g->nh >= 2 && near(t, g->th[0], h)) { /* the same start again (a refused or failed step) */
-        last = g->th[0] - g->th[1];
-        nh = g->nh;
         k = g->k;
-    } else {
+        if (pend == PEND_REJECTED && g->nrej + 1 >= 3) k = 1;
+        break;
+    default:
         return h; /* a restart: order 1 */
     }
     if (g->kfix > 0) k = g->kfix;
@@ -421,7 +437,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
     cd_bdf *g = s->g;
     cd_rosw *w;
     int n = (int)dim, c, k, st, retry;
-    double t1 = t + h, alpha0 = 0, gamma, C, hp;
+    double t1 = t + h, alpha0 = 0, gamma, C;
     const double *f0 = dydt_in;
     if (!g || n != g->ny || !(h > 0)) return GSL_EINVAL;
     w = g->rw;
@@ -430,8 +446,8 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
         g->atol = w->d->opt.atol;
     }
     /* what evolve did with the last step */
-    hp = g->t1p - g->t0p;
-    if (g->have_pend && near(t, g->t1p, hp)) { /* accepted */
+    switch (pending_outcome(g, t, h)) {
+    case PEND_ACCEPTED:
         if (g->k_used == g->k) g->nk++;
         push(g, t, y);
         g->nrej = 0;
@@ -439,13 +455,18 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             g->k = g->k_next;
             g->nk = 0;
         }
-    } else if (g->have_pend && near(t, g->t0p, hp)) { /* rejected by the error test */
+        break;
+    case PEND_REJECTED: /* by the error test */
         if (++g->nrej >= 3 && g->k > 1) {
             g->k = g->k_next = 1;
             g->nk = 0;
         }
-    } else if (!(g->nh > 0 && near(t, g->th[0], h))) { /* anywhere else: a restart */
+        break;
+    case PEND_RESTART:
         restart_history(g, t, y);
+        break;
+    default: /* the same start again */
+        break;
     }
     g->have_pend = 0;
     memcpy(g->Y[0], y, (size_t)n * sizeof(double)); /* the state as evolve passes it */
@@ -549,8 +570,9 @@ int cd_bdf_trial(cd_bdf *g, const gsl_odeiv2_system *sys, double t0, double tau,
     /* the predictor: the history's polynomial (y0 alone after a restart) */
     if (g->nh < k + 1) memcpy(g->yp, g->Y[0], (size_t)n * sizeof(double));
     else predict(g, k, t1);
-    if (g->lu_gamma == 0 || fabs(gamma / g->lu_gamma - 1.0) > CD_BDF_GAMMA_TOL) {
-        if (factor(g, gamma) != GSL_SUCCESS) return GSL_FAILURE;
+    if ((g->lu_gamma == 0 || fabs(gamma / g->lu_gamma - 1.0) > CD_BDF_GAMMA_TOL) && factor(g, gamma) != GSL_SUCCESS) {
+        g->ntrial_fail++;
+        return GSL_FAILURE;
     }
     g->eta = 1.0;
     g->ntrial++;

@@ -306,16 +306,14 @@ void *cd_integ_create(const cd_model *m, cd_data *d, void *mem, cd_error *err)
             cd_gauss4_init(&I->g4, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_gauss4_bind(I->drv->s, &I->g4);
         }
-        if (d->opt.stepper == CD_STEP_MSBDF) {
+        if (d->opt.stepper == CD_STEP_MSBDF || (I->autom && CD_AUTO_BDF))
             cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
-            cd_bdf_bind(I->drv->s, &I->bdf);
-        }
+        if (d->opt.stepper == CD_STEP_MSBDF) cd_bdf_bind(I->drv->s, &I->bdf);
         if (I->autom && CD_AUTO_BDF) {
-            /* auto's stiff stepper: msbdf, located as msbdf is (rk8pd sub-steps with
-             * I->loc; no stiff locator of its own) */
+            /* auto's stiff stepper: msbdf, located as msbdf is (on its own trial
+             * steps, cd_bdf_trial; no stiff locator of its own) */
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_bdf, n);
             if (!I->s_stiff) goto nomem;
-            cd_bdf_init(&I->bdf, &I->rw, m, (char *)(void *)(p + 1) + cd_rosw_size(m));
             cd_bdf_bind(I->s_stiff, &I->bdf);
         } else if (I->autom) {
             I->s_stiff = gsl_odeiv2_step_alloc(cd_step_ros34pw2, n);
