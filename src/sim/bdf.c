@@ -274,7 +274,7 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
  * ending at t1 with solution y1 (the history not yet including it). */
 static int choose_order(const cd_bdf *g, int k, double h, double t1, const double *y1)
 {
-    double x[CD_BDF_NHIST + 1], E[CD_BDF_KMAX + 2], cqs[CD_BDF_KMAX + 2], hqs[CD_BDF_KMAX + 2];
+    double x[CD_BDF_NHIST + 1], E[CD_BDF_KMAX + 2], cqs[CD_BDF_KMAX + 2];
     /* the order may rise only after k + 1 steps at order k, and not past
      * kmax: otherwise E[k + 1] is not needed, nor the highest divided
      * difference (the lower ones are the same, bit for bit) */
@@ -284,7 +284,7 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
     double best;
     x[0] = t1;
     for (j = 0; j < m; j++) x[j + 1] = g->th[j];
-    double dx[CD_BDF_NHIST + 1][CD_BDF_NHIST + 1];
+    double rdx[CD_BDF_NHIST + 1][CD_BDF_NHIST + 1];
     for (q = 0; q <= CD_BDF_KMAX + 1; q++) E[q] = -1;
     /* every order the loop below looks at gets at least the 0 of an unknown
      * whose points are all equal (skipped there: its divided differences are
@@ -292,20 +292,23 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
      * of the open slots */
     for (q = (k > 1 ? k - 1 : 1); q <= qmax && q <= CD_BDF_KMAX; q++)
         if (q + 1 <= m) E[q] = 0;
-    /* the differences' denominators, x_i - x_{i-j}, once for every unknown */
+    /* the differences' denominators' reciprocals, 1 / (x_i - x_{i-j}), once
+     * for every unknown (a product per difference, not a division: the
+     * divisions made this the stepper's costliest function) */
     for (j = 1; j <= m; j++)
-        for (i = m; i >= j; i--) dx[i][j] = x[i] - x[i - j];
-    /* and the error constants' factors q! h^q and 1 + ... + 1/q */
+        for (i = m; i >= j; i--) rdx[i][j] = 1.0 / (x[i] - x[i - j]);
+    /* and the error constants, q! h^(q+1) / (1 + ... + 1/q) */
     for (q = 1; q <= qmax && q <= CD_BDF_KMAX; q++) {
-        cqs[q] = 1;
-        hqs[q] = 0;
+        double hq = 0;
+        cqs[q] = h;
         for (i = 1; i <= q; i++) {
             cqs[q] *= i * h;
-            hqs[q] += 1.0 / i;
+            hq += 1.0 / i;
         }
+        cqs[q] /= hq;
     }
     for (c = 0; c < g->ny; c++) {
-        double v[CD_BDF_NHIST + 1], sc;
+        double v[CD_BDF_NHIST + 1], rsc;
         int moved = 0;
         v[0] = y1[c];
         for (j = 0; j < m; j++) {
@@ -313,14 +316,14 @@ static int choose_order(const cd_bdf *g, int k, double h, double t1, const doubl
             moved |= v[j + 1] != v[0];
         }
         if (!moved) continue;
-        sc = scale(g, y1[c]);
+        rsc = 1.0 / scale(g, y1[c]);
         /* Newton's divided differences in place: v[i] = y[x_0..x_i] */
         for (j = 1; j <= m; j++)
-            for (i = m; i >= j; i--) v[i] = (v[i] - v[i - 1]) / dx[i][j];
+            for (i = m; i >= j; i--) v[i] = (v[i] - v[i - 1]) * rdx[i][j];
         for (q = (k > 1 ? k - 1 : 1); q <= qmax && q <= CD_BDF_KMAX; q++) {
             double e;
             if (q + 1 > m) continue; /* needs q + 2 points */
-            e = fabs(v[q + 1]) * cqs[q] * h / hqs[q] / sc;
+            e = fabs(v[q + 1]) * cqs[q] * rsc;
             if (e > E[q]) E[q] = e;
         }
     }
