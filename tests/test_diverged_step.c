@@ -91,8 +91,8 @@ Test(diverged_step, auto_rejects_a_diverged_first_step) { check(CD_STEP_AUTO); }
 
 /* The case that found it: Fig. 5 with the bench's h_max = 0.05 s stopped at
  * 0.0287 s (the fingertips' first touch) with "event location failed". Now
- * it runs, and its state at 0.2 s agrees with the scenario's own
- * h_max = 1e-3 s run to the tolerance's order (both rtol 1e-8). */
+ * it runs, and its state at 0.2 s agrees with an h_max = 1e-3 s run (the
+ * scenario's own until 2026-11-28) to the tolerance's order (both rtol 1e-8). */
 #include <capdyn/io.h>
 static void fig5_to(const char *hmax, double t_end, double *q, cd_status *st)
 {
