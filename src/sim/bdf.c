@@ -87,7 +87,8 @@
  *
  * Cost per step: one evaluation per Newton iteration (often 1-3), one for
  * dydt_out (the exact f(t + h, y1), handed back by evolve as the next
- * dydt_in), an LU only when gamma moved by > 30% or J was renewed (of the
+ * dydt_in) unless the Newton iteration ended on the iterate it had just
+ * evaluated (newton(): within kappa by the contraction bound), an LU only when gamma moved by > 30% or J was renewed (of the
  * velocities' block, nU x nU, when J is the structured one: the reduction of
  * rosw.c, exact for the matrix I - gamma J; else of na x na), the Jacobian
  * every CD_ROSW_JAC_AGE steps. */
@@ -226,7 +227,8 @@ static int factor(cd_bdf *g, double gamma)
  * CD_BDF_NEWTON_MAX iterations) after an iterate already met kappa_ok >=
  * kappa, that iterate is the result (cd_bdf_trial asks for kappa below
  * the round-off of a tight tolerance; the steps pass kappa_ok = kappa). */
-static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *sys, double kappa, double kappa_ok)
+static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *sys, double kappa, double kappa_ok,
+                  int *f_at_y)
 {
     const cd_rosw *w = g->rw;
     int n = g->ny, na = w->na, it, a, c, met = 0;
@@ -252,6 +254,18 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
             theta = prev > 0 ? dn / prev : 0.0;
             if (theta >= 0.99) return met ? GSL_SUCCESS : GSL_FAILURE;
             eta = theta / (1.0 - theta);
+            /* the iterate just evaluated is itself within kappa of the
+             * solution (its distance at most |dY| / (1 - theta) by the
+             * contraction): it is the result, unmoved, and g->F is exactly
+             * f(t1, Y), which the step hands back as its end derivative
+             * instead of evaluating f once more */
+            if (f_at_y && dn / (1.0 - theta) <= kappa) {
+                g->eta = eta;
+                for (c = 0; c < n; c++)
+                    if (!isfinite(Y[c])) return GSL_EBADFUNC;
+                *f_at_y = 1;
+                return GSL_SUCCESS;
+            }
         }
         for (c = 0; c < n; c++) Y[c] += g->dY[c];
         prev = dn;
@@ -439,7 +453,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
     bdf_state *s = (bdf_state *)vs;
     cd_bdf *g = s->g;
     cd_rosw *w;
-    int n = (int)dim, c, k, st, retry;
+    int n = (int)dim, c, k, st, retry, f_at_y = 0;
     double t1 = t + h, alpha0 = 0, gamma, C;
     const double *f0 = dydt_in;
     if (!g || n != g->ny || !(h > 0)) return GSL_EINVAL;
@@ -524,7 +538,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             return GSL_FAILURE;
         }
     }
-    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA);
+    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA, &f_at_y);
     if (st == GSL_FAILURE && (g->lu_gamma != gamma || w->jac_t != t)) {
         /* an old matrix or Jacobian: once more with the step's own (CVODE's
          * recovery from a convergence failure) */
@@ -539,7 +553,7 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
             if (cd_rosw_jacobian(w, t, y, f0, sys) != GSL_SUCCESS) return GSL_EBADFUNC;
         }
         st = factor(g, gamma);
-        if (st == GSL_SUCCESS) st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA);
+        if (st == GSL_SUCCESS) st = newton(g, t1, gamma, sys, CD_BDF_KAPPA, CD_BDF_KAPPA, &f_at_y);
     }
     if (st != GSL_SUCCESS) {
         g->nfail++;
@@ -557,7 +571,10 @@ static int bdf_apply(void *vs, size_t dim, double t, double h, double y[], doubl
     g->t1p = t1;
     g->nsteps_k[k]++;
     w->jac_age++;
-    if (dydt_out && GSL_ODEIV_FN_EVAL(sys, t1, y, dydt_out) != GSL_SUCCESS) return GSL_EBADFUNC;
+    if (dydt_out) {
+        if (f_at_y) memcpy(dydt_out, g->F, (size_t)n * sizeof(double));
+        else if (GSL_ODEIV_FN_EVAL(sys, t1, y, dydt_out) != GSL_SUCCESS) return GSL_EBADFUNC;
+    }
     return GSL_SUCCESS;
 }
 
@@ -579,7 +596,7 @@ int cd_bdf_trial(cd_bdf *g, const gsl_odeiv2_system *sys, double t0, double tau,
     }
     g->eta = 1.0;
     g->ntrial++;
-    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA_TRIAL, CD_BDF_KAPPA);
+    st = newton(g, t1, gamma, sys, CD_BDF_KAPPA_TRIAL, CD_BDF_KAPPA, NULL);
     g->eta = eta_save;
     if (st != GSL_SUCCESS) {
         g->ntrial_fail++;
