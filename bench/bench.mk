@@ -48,6 +48,14 @@ $(BENCH_MODES): bench/stiff_modes.c $(LIB_IO) $(LIB)
 	$(CC) $(CFLAGS_ALL) -c $< -o $@.o
 	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
 
+# the cost of driving a scenario by cd_sim_advance in ticks of DT
+# (bench/advance_ticks.c; docs/dynamics.md "auto", short advance calls)
+BENCH_ADVANCE = $(BUILD)/advance_ticks
+$(BENCH_ADVANCE): bench/advance_ticks.c $(LIB_IO) $(LIB)
+	@mkdir -p $(dir $@)
+	$(CC) $(CFLAGS_ALL) -c $< -o $@.o
+	$(CXX) $(OPT) -o $@ $@.o $(LIB_IO) $(LIB) $(LIBS_IO) $(LIBS_CORE)
+
 bench-deps: deps
 	@bash scripts/install-bench-deps.sh
 
