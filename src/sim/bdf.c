@@ -88,11 +88,13 @@
  * Cost per step: one evaluation per Newton iteration (often 1-3), one for
  * dydt_out (the exact f(t + h, y1), handed back by evolve as the next
  * dydt_in) unless the Newton iteration ended on the iterate it had just
- * evaluated (newton(): within kappa by the contraction bound), an LU only when gamma moved by > 30% or J was renewed (of the
- * velocities' block, nU x nU, when J is the structured one: the reduction of
- * rosw.c, exact for the matrix I - gamma J; else of na x na), the Jacobian
- * every CD_ROSW_JAC_AGE steps. */
+ * evaluated (newton(): within kappa by the contraction bound), an LU only
+ * when gamma moved by > 30% or J was renewed (of the velocities' block,
+ * nU x nU, when J is the structured one: the reduction of rosw.c, exact for
+ * the matrix I - gamma J; else of na x na), the Jacobian every
+ * CD_ROSW_JAC_AGE steps. */
 #include "bdf.h"
+#include "../math/cd_math.h"
 
 #include <float.h>
 #include <gsl/gsl_errno.h>
@@ -261,8 +263,7 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
              * instead of evaluating f once more */
             if (f_at_y && dn / (1.0 - theta) <= kappa) {
                 g->eta = eta;
-                for (c = 0; c < n; c++)
-                    if (!isfinite(Y[c])) return GSL_EBADFUNC;
+                if (!cd_all_finite(Y, n)) return GSL_EBADFUNC;
                 *f_at_y = 1;
                 return GSL_SUCCESS;
             }
@@ -271,13 +272,10 @@ static int newton(cd_bdf *g, double t1, double gamma, const gsl_odeiv2_system *s
         prev = dn;
         if (eta * dn <= kappa || dn == 0) {
             g->eta = eta;
-            for (c = 0; c < n; c++)
-                if (!isfinite(Y[c])) return GSL_EBADFUNC;
-            return GSL_SUCCESS;
+            return cd_all_finite(Y, n) ? GSL_SUCCESS : GSL_EBADFUNC;
         }
         if (eta * dn <= kappa_ok) {
-            for (c = 0; c < n; c++)
-                if (!isfinite(Y[c])) return GSL_EBADFUNC;
+            if (!cd_all_finite(Y, n)) return GSL_EBADFUNC;
             met = 1;
         }
     }
